@@ -1,0 +1,87 @@
+#!/usr/bin/env bash
+# Installs what strata needs on a Debian/Ubuntu machine and checks that the Vulkan driver can do ray queries.
+# Idempotent. Runs as root, or re-runs itself through sudo.
+#
+# What it installs and why:
+#   - Vulkan loader + headers, the Khronos validation layer, vulkaninfo  (running and testing)
+#   - Mesa's lavapipe with VK_KHR_ray_query (Debian 12's own Mesa 22.3 lacks it; bookworm-backports has 25.x)
+#   - libshaderc-dev, glslang-dev, spirv-tools (static archives the build links; see build/shaderc-link)
+#   - pkg-config, a C/C++ toolchain (the shaderc crate builds a small C++ shim)
+# It never names a mirror: the backports suite is added on the URI the machine's own apt sources already use.
+set -euo pipefail
+
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null; then exec sudo -E bash "$0" "$@"; fi
+  echo "setup.sh: must run as root (or with sudo available)" >&2
+  exit 1
+fi
+
+export DEBIAN_FRONTEND=noninteractive
+. /etc/os-release
+echo "setup: ${PRETTY_NAME:-unknown system}"
+
+# The base packages, from the distribution's main archive.
+base_pkgs=(libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
+           libshaderc-dev glslang-dev glslang-tools spirv-tools
+           pkg-config build-essential ca-certificates)
+
+have_ray_query() {
+  command -v vulkaninfo >/dev/null || return 1
+  # capture first: with pipefail, grep -q closing the pipe early would fail the check
+  local out
+  out=$(VK_DRIVER_FILES=$(lvp_icd) vulkaninfo 2>/dev/null) || return 1
+  [[ "$out" == *VK_KHR_ray_query* ]]
+}
+lvp_icd() { ls /usr/share/vulkan/icd.d/lvp_icd*.json 2>/dev/null | head -n1; }
+
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${base_pkgs[@]}" mesa-vulkan-drivers
+
+if ! have_ray_query && [ "${ID:-}" = debian ] && [ "${VERSION_CODENAME:-}" = bookworm ]; then
+  # Debian 12: take Mesa from bookworm-backports on the mirror the machine already uses.
+  uri=""
+  for f in /etc/apt/sources.list.d/*.sources; do
+    [ -f "$f" ] || continue
+    uri=$(awk '/^URIs:/{print $2; exit}' "$f")
+    # skip the security archive; we want the main one
+    case "$uri" in *security*) uri="";; *) [ -n "$uri" ] && break;; esac
+  done
+  if [ -z "$uri" ] && [ -f /etc/apt/sources.list ]; then
+    uri=$(awk '$1=="deb" && $0 !~ /security/ {for(i=2;i<=NF;i++) if ($i ~ /^[a-z]+:\/\//) {print $i; exit}}' /etc/apt/sources.list)
+  fi
+  if [ -z "$uri" ]; then
+    echo "setup: could not find the apt mirror URI in /etc/apt/sources.list(.d); add bookworm-backports by hand" >&2
+    exit 1
+  fi
+  list=/etc/apt/sources.list.d/strata-backports.list
+  line="deb $uri bookworm-backports main"
+  if [ "$(cat "$list" 2>/dev/null)" != "$line" ]; then
+    echo "setup: adding bookworm-backports from $uri"
+    echo "$line" > "$list"
+  fi
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends -t bookworm-backports mesa-vulkan-drivers
+fi
+
+# Check, not hope: the lavapipe ICD must report ray queries.
+icd=$(lvp_icd)
+if [ -z "$icd" ]; then
+  echo "setup: FAILED: no lavapipe ICD under /usr/share/vulkan/icd.d" >&2
+  exit 1
+fi
+summary=$(VK_DRIVER_FILES="$icd" vulkaninfo --summary 2>/dev/null || true)
+device=$(printf '%s\n' "$summary" | awk -F'= ' '/deviceName/{print $2; exit}')
+driver=$(printf '%s\n' "$summary" | awk -F'= ' '/driverInfo/{print $2; exit}')
+mesa=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || echo unknown)
+layer=$(dpkg-query -W -f='${Version}' vulkan-validationlayers 2>/dev/null || echo missing)
+if have_ray_query; then rq=yes; else rq=no; fi
+echo "setup: device:            ${device:-none found}"
+echo "setup: driver:            ${driver:-unknown}"
+echo "setup: mesa package:      $mesa"
+echo "setup: validation layer:  $layer"
+echo "setup: VK_KHR_ray_query:  $rq"
+if [ "$rq" != yes ]; then
+  echo "setup: FAILED: lavapipe does not report VK_KHR_ray_query; strata needs a Mesa with ray queries (25.0+)" >&2
+  exit 1
+fi
+echo "setup: OK"

@@ -1,0 +1,32 @@
+#version 460
+// Casts one ray per invocation from a buffer of rays against the TLAS and records the closest hit:
+// the ray-query smoke test, and later the benchmark's bare ray-query ceiling.
+#extension GL_EXT_ray_query : require
+#extension GL_EXT_scalar_block_layout : require
+
+layout(local_size_x = 64) in;
+
+struct ProbeRay { vec3 origin; float t_min; vec3 direction; float t_max; };
+struct ProbeHit { float t; int instance_custom_index; int instance_id; int primitive_id; };
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
+layout(set = 0, binding = 1, scalar) readonly buffer Rays { ProbeRay rays[]; };
+layout(set = 0, binding = 2, scalar) writeonly buffer Hits { ProbeHit hits[]; };
+layout(push_constant) uniform ProbePush { uint ray_count; } pc;
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= pc.ray_count) return;
+    ProbeRay r = rays[i];
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, r.origin, r.t_min, r.direction, r.t_max);
+    while (rayQueryProceedEXT(q)) {}
+    ProbeHit h = ProbeHit(-1.0, -1, -1, -1);
+    if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
+        h.t = rayQueryGetIntersectionTEXT(q, true);
+        h.instance_custom_index = rayQueryGetIntersectionInstanceCustomIndexEXT(q, true);
+        h.instance_id = rayQueryGetIntersectionInstanceIdEXT(q, true);
+        h.primitive_id = rayQueryGetIntersectionPrimitiveIndexEXT(q, true);
+    }
+    hits[i] = h;
+}

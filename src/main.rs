@@ -1,0 +1,186 @@
+//! The `strata` command line.
+use anyhow::{anyhow, bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use strata::vk::{Gpu, GpuOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "strata",
+    version,
+    about = "A headless Vulkan renderer: distributed ray tracing with ray queries, validated on lavapipe",
+    long_about = "strata renders glTF 2.0 scenes without a window through raw Vulkan and writes PNG or OpenEXR.\n\
+                  It needs a Vulkan 1.3 device with VK_KHR_ray_query: on a machine without a GPU, run\n\
+                  scripts/setup.sh to install Mesa's lavapipe. `strata info` shows what it finds.",
+    after_help = "Examples:\n  strata info\n  strata render scenes/showcase.gltf -o showcase.png\n  \
+                  strata render model.glb -o frame.exr --size 1920x1080 --validate"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG (8-bit sRGB) or OpenEXR (32-bit float linear RGBA) file.
+    #[command(after_help = "The output format follows the extension of -o (.png or .exr). The file is written \
+                            atomically: if anything fails, nothing is left at the destination.\n\n\
+                            Examples:\n  strata render Box.gltf -o box.png\n  \
+                            strata render Box.gltf -o box.exr --size 512x512 --device llvmpipe --validate")]
+    Render(RenderArgs),
+    /// List every Vulkan device with its driver, API version and ray-query support, and whether the
+    /// Khronos validation layer is installed.
+    Info(InfoArgs),
+}
+
+#[derive(Args)]
+struct GpuArgs {
+    /// Run under the Khronos validation layer (synchronization validation and best practices on) and print
+    /// its messages; exit non-zero if it reports any error or warning.
+    #[arg(long)]
+    validate: bool,
+    /// Use this device: its index in `strata info`, or part of its name (e.g. "llvmpipe").
+    #[arg(long, value_name = "NAME|INDEX")]
+    device: Option<String>,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// The scene: a glTF 2.0 file (.gltf or .glb).
+    scene: PathBuf,
+    /// Output file; .png or .exr.
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    /// Image size in pixels.
+    #[arg(long, value_name = "WxH", default_value = "960x540", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Linear RGB background colour of pixels no surface covers, as R,G,B.
+    #[arg(long, value_name = "R,G,B", default_value = "0.02,0.02,0.025", value_parser = parse_rgb)]
+    background: [f32; 3],
+    #[command(flatten)]
+    gpu: GpuArgs,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// Also print the devices' validation messages (creates an instance with the layer when installed).
+    #[arg(long)]
+    validate: bool,
+}
+
+/// Largest side accepted on the command line before asking the device (which may allow less).
+const MAX_SIDE: u32 = 16384;
+
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("\"{text}\" is not WIDTHxHEIGHT, e.g. 960x540"))?;
+    let side = |s: &str| -> Result<u32, String> {
+        let v: u32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a whole number of pixels"))?;
+        if v == 0 || v > MAX_SIDE {
+            return Err(format!("{v} pixels is outside 1..={MAX_SIDE}"));
+        }
+        Ok(v)
+    };
+    Ok((side(w)?, side(h)?))
+}
+
+fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("\"{text}\" is not R,G,B (three numbers)"));
+    }
+    let mut rgb = [0.0; 3];
+    for (slot, part) in rgb.iter_mut().zip(parts) {
+        let v: f32 = part.trim().parse().map_err(|_| format!("\"{part}\" is not a number"))?;
+        if !v.is_finite() || v < 0.0 {
+            return Err(format!("{v} is not a finite non-negative radiance"));
+        }
+        *slot = v;
+    }
+    Ok(rgb)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+        Command::Info(args) => info(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn render(args: RenderArgs) -> Result<()> {
+    // Check the output name before any work, so a typo costs nothing.
+    strata::output::OutputFormat::from_path(&args.output)?;
+    let scene = strata::load_scene(&args.scene)?;
+    let started = std::time::Instant::now();
+    let gpu = Gpu::new(&GpuOptions {
+        validation: args.gpu.validate,
+        echo_messages: args.gpu.validate,
+        device: args.gpu.device.clone(),
+    })?;
+    let log = gpu.validation_log();
+    let settings =
+        strata::render::PreviewSettings { width: args.size.0, height: args.size.1, background: args.background };
+    let frame = strata::render_preview(&gpu, &scene, &settings)?;
+    let device_name = gpu.device.report.name.clone();
+    drop(gpu);
+    if args.gpu.validate {
+        // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.
+        log.check().map_err(|report| anyhow!("{report}"))?;
+    }
+    strata::output::write_frame(&args.output, &frame)?;
+    eprintln!(
+        "strata: wrote {} ({}x{}, {} triangles, {} instances) on {device_name} in {:.2} s",
+        args.output.display(),
+        frame.width,
+        frame.height,
+        scene.triangle_count(),
+        scene.instances.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+fn info(args: InfoArgs) -> Result<()> {
+    let loader = strata::vk::instance::loader_info()?;
+    println!("Vulkan loader: {}", strata::vk::instance::version_string(loader.loader_version));
+    match &loader.validation_layer {
+        Some(layer) => println!("Validation layer: {layer}"),
+        None => println!("Validation layer: not installed (run scripts/setup.sh for vulkan-validationlayers)"),
+    }
+    let instance = strata::vk::instance::Instance::new(&strata::vk::instance::InstanceOptions {
+        validation: args.validate && loader.validation_layer.is_some(),
+        echo_messages: args.validate,
+    })
+    .context("creating a Vulkan instance")?;
+    let reports = strata::vk::device::enumerate_devices(&instance)?;
+    if reports.is_empty() {
+        bail!("no Vulkan devices found; run scripts/setup.sh to install Mesa's lavapipe");
+    }
+    let chosen = strata::vk::device::select_device(&reports, None).ok();
+    println!("Devices:");
+    for r in &reports {
+        let marker = if Some(r.index) == chosen { " (default)" } else { "" };
+        println!("  [{}] {}{marker}", r.index, r.name);
+        println!("      type:      {}", r.type_name());
+        println!("      driver:    {} {}", r.driver_name, r.driver_info);
+        println!("      Vulkan:    {}", r.api_version_string());
+        println!("      ray query: {}", if r.ray_query { "yes" } else { "no" });
+        if r.qualifies() {
+            println!("      strata:    usable");
+        } else {
+            println!("      strata:    not usable, lacks {}", r.missing.join(", "));
+        }
+    }
+    if chosen.is_none() {
+        bail!("no device can run strata; run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query");
+    }
+    Ok(())
+}

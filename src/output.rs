@@ -1,0 +1,176 @@
+//! Writing frames: PNG (8-bit sRGB) and OpenEXR (32-bit float linear RGBA, plus named layers), chosen by the
+//! file extension. Every write is atomic: a temporary file in the destination directory, then a rename, so a
+//! failed or interrupted render never leaves a partial file at the destination.
+use anyhow::{anyhow, bail, Context as _, Result};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A linear-light RGBA float picture, row-major, top row first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl Frame {
+    pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>) -> Result<Self> {
+        if pixels.len() != width as usize * height as usize {
+            bail!("frame of {width}x{height} needs {} pixels, got {}", width as usize * height as usize, pixels.len());
+        }
+        Ok(Self { width, height, pixels })
+    }
+
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+}
+
+/// The formats strata writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    Png,
+    Exr,
+}
+
+impl OutputFormat {
+    /// The format the path's extension names; anything else is an error that says what is accepted.
+    pub fn from_path(path: &Path) -> Result<Self> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(Self::Png),
+            Some("exr") => Ok(Self::Exr),
+            Some(other) => bail!("{}: unknown output extension \".{other}\" (use .png or .exr)", path.display()),
+            None => bail!("{}: output file has no extension (use .png or .exr)", path.display()),
+        }
+    }
+}
+
+/// sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
+pub fn linear_to_srgb(linear: f32) -> f32 {
+    let c = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
+    if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The inverse of [`linear_to_srgb`].
+pub fn srgb_to_linear(encoded: f32) -> f32 {
+    if encoded <= 0.04045 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// 8-bit sRGB RGBA bytes of a linear frame (colour clamped to [0, 1] and encoded; alpha linear).
+pub fn to_srgb8(frame: &Frame) -> Vec<u8> {
+    frame
+        .pixels
+        .iter()
+        .flat_map(|p| {
+            let q = |v: f32| (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
+            [q(linear_to_srgb(p[0])), q(linear_to_srgb(p[1])), q(linear_to_srgb(p[2])), q(p[3].clamp(0.0, 1.0))]
+        })
+        .collect()
+}
+
+/// Writes `frame` to `path` in the format its extension names, atomically.
+pub fn write_frame(path: &Path, frame: &Frame) -> Result<()> {
+    write_frame_with_layers(path, frame, &[])
+}
+
+/// Like [`write_frame`], with extra named RGBA layers (AOVs) for EXR; PNG output refuses layers.
+pub fn write_frame_with_layers(path: &Path, frame: &Frame, layers: &[(&str, &Frame)]) -> Result<()> {
+    match OutputFormat::from_path(path)? {
+        OutputFormat::Png => {
+            if !layers.is_empty() {
+                bail!("{}: PNG cannot hold extra layers; write an .exr", path.display());
+            }
+            let bytes = to_srgb8(frame);
+            write_atomic(path, |file| {
+                let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
+                image::ImageEncoder::write_image(
+                    encoder,
+                    &bytes,
+                    frame.width,
+                    frame.height,
+                    image::ExtendedColorType::Rgba8,
+                )
+                .context("encoding PNG")
+            })
+        }
+        OutputFormat::Exr => write_atomic(path, |file| write_exr(file, frame, layers)),
+    }
+}
+
+fn write_exr(file: &mut std::fs::File, frame: &Frame, layers: &[(&str, &Frame)]) -> Result<()> {
+    use exr::prelude::*;
+    let size = Vec2(frame.width as usize, frame.height as usize);
+    let make_layer = |name: Option<&str>, f: &Frame| -> anyhow::Result<Layer<AnyChannels<FlatSamples>>> {
+        if f.width != frame.width || f.height != frame.height {
+            bail!("layer {name:?} is {}x{}, the frame is {}x{}", f.width, f.height, frame.width, frame.height);
+        }
+        let channel =
+            |label: &str, i: usize| AnyChannel::new(label, FlatSamples::F32(f.pixels.iter().map(|p| p[i]).collect()));
+        // exr sorts channels by name; order given here does not matter.
+        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+            channel("R", 0),
+            channel("G", 1),
+            channel("B", 2),
+            channel("A", 3),
+        ]));
+        let mut attributes = LayerAttributes::default();
+        if let Some(name) = name {
+            attributes.layer_name = Some(Text::new_or_none(name).ok_or_else(|| anyhow!("bad layer name {name:?}"))?);
+        }
+        Ok(Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, channels))
+    };
+    let mut all = vec![make_layer(None, frame)?];
+    for (name, layer) in layers {
+        all.push(make_layer(Some(name), layer)?);
+    }
+    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions(size)), all);
+    image.write().to_buffered(std::io::BufWriter::new(file)).map_err(|e| anyhow!(e)).context("encoding EXR")
+}
+
+static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// Writes a file atomically: `write` fills a temporary file next to `path`; only when it succeeds and the data
+/// is flushed to disk is the file renamed onto `path`. On any error the temporary file is removed and `path` is
+/// untouched.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        bail!("{}: the output directory {} does not exist", path.display(), dir.display());
+    }
+    let file_name = path.file_name().ok_or_else(|| anyhow!("{}: not a file path", path.display()))?;
+    let temp = dir.join(format!(
+        ".{}.tmp-{}-{}",
+        file_name.to_string_lossy(),
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temp)
+            .with_context(|| format!("cannot create {}", temp.display()))?;
+        write(&mut file)?;
+        file.flush()?;
+        file.sync_all().with_context(|| format!("cannot flush {}", temp.display()))?;
+        drop(file);
+        std::fs::rename(&temp, path).with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&temp);
+    }
+    result.with_context(|| format!("writing {}", path.display()))
+}

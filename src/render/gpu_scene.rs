@@ -1,0 +1,72 @@
+//! The scene on the GPU: per-primitive vertex, normal and index buffers, device-local.
+use crate::scene::Scene;
+use crate::vk::accel::BUILD_INPUT_USAGE;
+use crate::vk::{Buffer, Device};
+use anyhow::Result;
+use ash::vk;
+use std::sync::Arc;
+
+pub struct GpuPrimitive {
+    pub positions: Buffer,
+    pub normals: Buffer,
+    pub indices: Buffer,
+    pub index_count: u32,
+    pub vertex_count: u32,
+    pub material: Option<usize>,
+}
+
+pub struct GpuMesh {
+    pub name: String,
+    pub primitives: Vec<GpuPrimitive>,
+}
+
+pub struct GpuScene {
+    pub meshes: Vec<GpuMesh>,
+}
+
+impl GpuScene {
+    pub fn upload(device: &Arc<Device>, scene: &Scene) -> Result<Self> {
+        let mut meshes = Vec::with_capacity(scene.meshes.len());
+        for mesh in &scene.meshes {
+            let mut primitives = Vec::new();
+            for (i, p) in mesh.primitives.iter().enumerate() {
+                if p.indices.is_empty() {
+                    continue;
+                }
+                let name = format!("{}/{i}", mesh.name);
+                // Positions and indices also feed BLAS builds later.
+                let positions = Buffer::device_local_with_data(
+                    device,
+                    &format!("{name} positions"),
+                    &p.positions,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | BUILD_INPUT_USAGE,
+                    16,
+                )?;
+                let normals = Buffer::device_local_with_data(
+                    device,
+                    &format!("{name} normals"),
+                    &p.normals,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                    16,
+                )?;
+                let indices = Buffer::device_local_with_data(
+                    device,
+                    &format!("{name} indices"),
+                    &p.indices,
+                    vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | BUILD_INPUT_USAGE,
+                    16,
+                )?;
+                primitives.push(GpuPrimitive {
+                    positions,
+                    normals,
+                    indices,
+                    index_count: p.indices.len() as u32,
+                    vertex_count: p.positions.len() as u32,
+                    material: p.material,
+                });
+            }
+            meshes.push(GpuMesh { name: mesh.name.clone(), primitives });
+        }
+        Ok(Self { meshes })
+    }
+}

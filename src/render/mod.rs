@@ -1,0 +1,8 @@
+//! The frame: joins the CPU scene to Vulkan. Each pass owns its pipeline and records into a command buffer.
+pub mod gpu_scene;
+pub mod preview;
+pub mod ray_probe;
+pub mod solid;
+
+pub use gpu_scene::GpuScene;
+pub use preview::{PreviewPass, PreviewSettings};

@@ -1,0 +1,191 @@
+//! The first-frame preview pass: rasterizes every placed mesh with simple view-space shading into a linear
+//! RGBA32F image (dynamic rendering, depth tested). The full G-buffer and accumulation passes replace it.
+use super::gpu_scene::GpuScene;
+use crate::output::Frame;
+use crate::scene::Scene;
+use crate::shaders;
+use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
+use crate::vk::pipeline::{GraphicsDesc, Pipeline};
+use crate::vk::readback::read_image;
+use crate::vk::{Device, Image};
+use anyhow::{bail, Result};
+use ash::vk;
+use glam::{Mat3, Mat4, Vec4};
+use std::sync::Arc;
+
+pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Push constants; mirrors `shaders/include/preview_layout.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PreviewPush {
+    pub clip_from_object: Mat4,
+    pub view_normal_rows: [Vec4; 3],
+    pub base_color: Vec4,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct PreviewSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB of pixels no surface covers (opaque).
+    pub background: [f32; 3],
+}
+
+pub struct PreviewPass {
+    pipeline: Pipeline,
+    device: Arc<Device>,
+}
+
+impl PreviewPass {
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
+        let vertex_bindings = [
+            vk::VertexInputBindingDescription::default().binding(0).stride(12),
+            vk::VertexInputBindingDescription::default().binding(1).stride(12),
+        ];
+        let vertex_attributes = [
+            vk::VertexInputAttributeDescription::default().location(0).binding(0).format(vk::Format::R32G32B32_SFLOAT),
+            vk::VertexInputAttributeDescription::default().location(1).binding(1).format(vk::Format::R32G32B32_SFLOAT),
+        ];
+        let pipeline = Pipeline::graphics(
+            device,
+            &GraphicsDesc {
+                name: "preview pipeline",
+                vertex: ("preview.vert", shaders::PREVIEW_VERT),
+                fragment: ("preview.frag", shaders::PREVIEW_FRAG),
+                bindings: &[],
+                push_constant_size: std::mem::size_of::<PreviewPush>() as u32,
+                vertex_bindings: &vertex_bindings,
+                vertex_attributes: &vertex_attributes,
+                color_formats: &[COLOR_FORMAT],
+                depth_format: Some(DEPTH_FORMAT),
+                additive_blend: false,
+                cull_mode: vk::CullModeFlags::NONE,
+            },
+        )?;
+        Ok(Self { pipeline, device: device.clone() })
+    }
+
+    /// Renders the scene from its camera (or a framing default) and reads the picture back.
+    pub fn render(&self, scene: &Scene, gpu_scene: &GpuScene, settings: &PreviewSettings) -> Result<Frame> {
+        let device = &self.device;
+        let (width, height) = (settings.width, settings.height);
+        if width == 0 || height == 0 {
+            bail!("image size {width}x{height}: width and height must be at least 1");
+        }
+        let extent = vk::Extent2D { width, height };
+        let color = Image::new_2d(
+            device,
+            "preview color",
+            COLOR_FORMAT,
+            extent,
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC,
+        )?;
+        let depth = Image::new_2d(
+            device,
+            "preview depth",
+            DEPTH_FORMAT,
+            extent,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        )?;
+        let camera = scene.camera_or_default();
+        let view_from_world = camera.view_from_world();
+        let clip_from_world = camera.clip_from_view(width as f32 / height as f32) * view_from_world;
+
+        submit_and_wait(device, "preview frame", |cmd| {
+            image_barrier(
+                device,
+                cmd,
+                &color,
+                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
+            );
+            image_barrier(
+                device,
+                cmd,
+                &depth,
+                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, Access::DEPTH_ATTACHMENT),
+            );
+            labelled(device, cmd, "preview pass", || {
+                let [r, g, b] = settings.background;
+                let color_attachment = [vk::RenderingAttachmentInfo::default()
+                    .image_view(color.view)
+                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [r, g, b, 1.0] } })];
+                let depth_attachment = vk::RenderingAttachmentInfo::default()
+                    .image_view(depth.view)
+                    .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .clear_value(vk::ClearValue {
+                        depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
+                    });
+                let rendering = vk::RenderingInfo::default()
+                    .render_area(extent.into())
+                    .layer_count(1)
+                    .color_attachments(&color_attachment)
+                    .depth_attachment(&depth_attachment);
+                unsafe {
+                    device.raw.cmd_begin_rendering(cmd, &rendering);
+                    let viewport =
+                        vk::Viewport::default().width(width as f32).height(height as f32).min_depth(0.0).max_depth(1.0);
+                    device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
+                    device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
+                    device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
+                }
+                for instance in &scene.instances {
+                    let view_normal =
+                        Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
+                    for primitive in &gpu_scene.meshes[instance.mesh].primitives {
+                        let material =
+                            primitive.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
+                        let push = PreviewPush {
+                            clip_from_object: clip_from_world * instance.world_from_object,
+                            view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
+                            base_color: material.base_color,
+                        };
+                        unsafe {
+                            device.raw.cmd_push_constants(
+                                cmd,
+                                self.pipeline.layout,
+                                vk::ShaderStageFlags::ALL,
+                                0,
+                                bytemuck::bytes_of(&push),
+                            );
+                            device.raw.cmd_bind_vertex_buffers(
+                                cmd,
+                                0,
+                                &[primitive.positions.raw, primitive.normals.raw],
+                                &[0, 0],
+                            );
+                            device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
+                            device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, 0);
+                        }
+                    }
+                }
+                unsafe { device.raw.cmd_end_rendering(cmd) };
+            });
+            Ok(())
+        })?;
+        let readback =
+            read_image(device, &color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE)?;
+        Frame::new(width, height, readback.to_rgba_f32()?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_constants_match_the_glsl_layout() {
+        // std430: mat4 at 0, vec4[3] at 64, vec4 at 112; 128 bytes is also the guaranteed push-constant minimum.
+        assert_eq!(std::mem::size_of::<PreviewPush>(), 128);
+        assert_eq!(std::mem::offset_of!(PreviewPush, view_normal_rows), 64);
+        assert_eq!(std::mem::offset_of!(PreviewPush, base_color), 112);
+    }
+}

@@ -1,0 +1,103 @@
+//! A bare ray-query pass: casts rays from a buffer against a TLAS and returns the closest hits, with no
+//! shading. The ray-query smoke test uses it; benchmarks use it as the driver's ray-throughput ceiling.
+use crate::shaders;
+use crate::vk::accel::AccelerationStructure;
+use crate::vk::commands::{buffer_barrier, labelled, submit_and_wait, Access};
+use crate::vk::pipeline::{Binding, Pipeline};
+use crate::vk::{Buffer, Device, MemoryLocation};
+use anyhow::{bail, Result};
+use ash::vk;
+use glam::Vec3;
+use std::sync::Arc;
+
+/// Mirrors `ProbeRay` in `shaders/ray_probe.comp` (scalar layout).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ProbeRay {
+    pub origin: Vec3,
+    pub t_min: f32,
+    pub direction: Vec3,
+    pub t_max: f32,
+}
+
+/// Mirrors `ProbeHit`: `t < 0` and ids of −1 mean a miss.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ProbeHit {
+    pub t: f32,
+    pub instance_custom_index: i32,
+    pub instance_id: i32,
+    pub primitive_id: i32,
+}
+
+impl ProbeHit {
+    pub fn is_hit(&self) -> bool {
+        self.instance_id >= 0
+    }
+}
+
+const LOCAL_SIZE: u32 = 64;
+
+pub struct RayProbe {
+    pipeline: Pipeline,
+    device: Arc<Device>,
+}
+
+impl RayProbe {
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
+        let bindings = [
+            Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
+            Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(2, vk::DescriptorType::STORAGE_BUFFER),
+        ];
+        let pipeline =
+            Pipeline::compute(device, "ray probe", ("ray_probe.comp", shaders::RAY_PROBE_COMP), &bindings, 4)?;
+        Ok(Self { pipeline, device: device.clone() })
+    }
+
+    /// Casts `rays` against `tlas` and returns one hit record per ray.
+    pub fn cast(&self, tlas: &AccelerationStructure, rays: &[ProbeRay]) -> Result<Vec<ProbeHit>> {
+        if rays.is_empty() {
+            return Ok(Vec::new());
+        }
+        if rays.len() > u32::MAX as usize / 2 {
+            bail!("{} rays is too many for one probe", rays.len());
+        }
+        let device = &self.device;
+        let ray_buffer = Buffer::with_data(device, "probe rays", rays, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let hit_buffer = Buffer::new(
+            device,
+            "probe hits",
+            (rays.len() * std::mem::size_of::<ProbeHit>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuToCpu,
+            16,
+        )?;
+        let set = self.pipeline.new_descriptor_set("ray probe set")?;
+        set.acceleration_structure(0, tlas.raw).storage_buffer(1, &ray_buffer).storage_buffer(2, &hit_buffer);
+        let count = rays.len() as u32;
+        submit_and_wait(device, "ray probe", |cmd| {
+            labelled(device, cmd, "ray probe pass", || {
+                self.pipeline.bind(cmd, Some(&set), bytemuck::bytes_of(&count));
+                unsafe { device.raw.cmd_dispatch(cmd, count.div_ceil(LOCAL_SIZE), 1, 1) };
+            });
+            buffer_barrier(device, cmd, &hit_buffer, Access::COMPUTE_WRITE, Access::HOST_READ);
+            Ok(())
+        })?;
+        let mut hits: Vec<ProbeHit> = hit_buffer.read()?;
+        hits.truncate(rays.len());
+        Ok(hits)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_match_the_glsl_scalar_structs() {
+        assert_eq!(std::mem::size_of::<ProbeRay>(), 32);
+        assert_eq!(std::mem::offset_of!(ProbeRay, direction), 16);
+        assert_eq!(std::mem::size_of::<ProbeHit>(), 16);
+    }
+}

@@ -1,0 +1,131 @@
+//! Cameras in glTF's convention (right-handed, +Y up, looking down −Z) and their Vulkan projections
+//! (clip-space Y down, depth in [0, 1]).
+use glam::{Mat4, Vec3, Vec4};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// Vertical field of view in radians; no `zfar` means an infinite far plane (glTF 2.0 §3.10.2).
+    Perspective { yfov: f32, znear: f32, zfar: Option<f32> },
+    /// Half extents of the view volume (glTF's xmag/ymag).
+    Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    pub world_from_camera: Mat4,
+    pub projection: Projection,
+}
+
+impl Camera {
+    /// A perspective camera that frames the given bounds: looking at their centre along −Z, raised a little,
+    /// far enough that the bounding sphere fits the vertical field of view.
+    pub fn framing(bounds: Option<(Vec3, Vec3)>) -> Self {
+        let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+        let center = (lo + hi) * 0.5;
+        let radius = ((hi - lo).length() * 0.5).max(1e-3);
+        let yfov = 45f32.to_radians();
+        let distance = radius / (yfov * 0.5).sin() * 1.1;
+        let direction = Vec3::new(0.35, 0.45, 1.0).normalize();
+        let eye = center + direction * distance;
+        Self {
+            name: "default framing camera".into(),
+            world_from_camera: look_at(eye, center, Vec3::Y),
+            projection: Projection::Perspective {
+                yfov,
+                znear: (distance - radius).max(distance * 1e-3),
+                zfar: Some(distance + radius * 2.0),
+            },
+        }
+    }
+
+    pub fn view_from_world(&self) -> Mat4 {
+        self.world_from_camera.inverse()
+    }
+
+    /// Vulkan clip-from-view for an image of the given aspect (width / height): clip Y points down (the view's
+    /// Y up), depth maps to [0, 1] with the near plane at 0.
+    pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
+        match self.projection {
+            Projection::Perspective { yfov, znear, zfar } => perspective(yfov, aspect, znear, zfar),
+            Projection::Orthographic { ymag, znear, zfar, .. } => {
+                // Keep the vertical extent; the horizontal one follows the image's aspect.
+                orthographic(ymag * aspect, ymag, znear, zfar)
+            }
+        }
+    }
+}
+
+/// The camera-to-world transform of a camera at `eye` looking at `target` (its −Z towards the target).
+pub fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    let forward = (target - eye).normalize();
+    let right = forward.cross(up).normalize();
+    let true_up = right.cross(forward);
+    Mat4::from_cols(right.extend(0.0), true_up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0))
+}
+
+/// Perspective projection for a view looking down −Z; `zfar = None` is the infinite-far limit.
+/// x_c = f/a·x, y_c = −f·y, w_c = −z, depth = 0 at z = −near and 1 at z = −far, f = 1/tan(yfov/2).
+pub fn perspective(yfov: f32, aspect: f32, znear: f32, zfar: Option<f32>) -> Mat4 {
+    let f = 1.0 / (yfov * 0.5).tan();
+    let (a, b) = match zfar {
+        Some(zfar) => (zfar / (znear - zfar), znear * zfar / (znear - zfar)),
+        None => (-1.0, -znear),
+    };
+    Mat4::from_cols(
+        Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, -f, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, a, -1.0),
+        Vec4::new(0.0, 0.0, b, 0.0),
+    )
+}
+
+/// Orthographic projection of the box |x| ≤ half_width, |y| ≤ half_height, −far ≤ z ≤ −near.
+pub fn orthographic(half_width: f32, half_height: f32, znear: f32, zfar: f32) -> Mat4 {
+    let depth = 1.0 / (zfar - znear);
+    Mat4::from_cols(
+        Vec4::new(1.0 / half_width, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, -1.0 / half_height, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, -depth, 0.0),
+        Vec4::new(0.0, 0.0, -znear * depth, 1.0),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ndc(m: Mat4, p: Vec3) -> Vec3 {
+        let c = m * p.extend(1.0);
+        c.truncate() / c.w
+    }
+
+    #[test]
+    fn perspective_maps_near_and_far_to_vulkan_depth() {
+        let m = perspective(90f32.to_radians(), 2.0, 0.5, Some(10.0));
+        assert!((ndc(m, Vec3::new(0.0, 0.0, -0.5)).z - 0.0).abs() < 1e-6);
+        assert!((ndc(m, Vec3::new(0.0, 0.0, -10.0)).z - 1.0).abs() < 1e-6);
+        // 90° vertical fov: y = −z lands on the top edge, which is −1 in Vulkan clip space (Y down).
+        assert!((ndc(m, Vec3::new(0.0, 2.0, -2.0)).y + 1.0).abs() < 1e-6);
+        // aspect 2: x = 2·(−z) lands on the right edge.
+        assert!((ndc(m, Vec3::new(4.0, 0.0, -2.0)).x - 1.0).abs() < 1e-6);
+        let inf = perspective(90f32.to_radians(), 1.0, 0.5, None);
+        assert!(ndc(inf, Vec3::new(0.0, 0.0, -0.5)).z.abs() < 1e-6);
+        assert!((ndc(inf, Vec3::new(0.0, 0.0, -1e6)).z - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn orthographic_maps_the_box_to_the_unit_volume() {
+        let m = orthographic(2.0, 1.0, 1.0, 3.0);
+        assert!((ndc(m, Vec3::new(2.0, 1.0, -1.0)) - Vec3::new(1.0, -1.0, 0.0)).length() < 1e-6);
+        assert!((ndc(m, Vec3::new(-2.0, -1.0, -3.0)) - Vec3::new(-1.0, 1.0, 1.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn look_at_points_minus_z_at_the_target() {
+        let m = look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y);
+        let forward = m.transform_vector3(-Vec3::Z);
+        assert!((forward - (-Vec3::new(1.0, 2.0, 3.0)).normalize()).length() < 1e-6);
+        assert!((m.inverse().transform_point3(Vec3::ZERO).z + 14f32.sqrt()).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,199 @@
+//! Acceleration structures (`VK_KHR_acceleration_structure`): one BLAS per mesh, one TLAS over instances.
+//! Builds are recorded into a command buffer and waited for; the scratch buffer is sized and aligned per the
+//! device's `minAccelerationStructureScratchOffsetAlignment`.
+use super::commands::{memory_barrier, submit_and_wait, Access};
+use super::device::Device;
+use super::memory::{Buffer, MemoryLocation};
+use anyhow::{bail, Context as _, Result};
+use ash::vk;
+use glam::Mat4;
+use std::sync::Arc;
+
+/// Usage for buffers that feed an acceleration-structure build (vertices, indices, instances).
+pub const BUILD_INPUT_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+    vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR.as_raw()
+        | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS.as_raw(),
+);
+
+/// An acceleration structure with the buffer that stores it.
+pub struct AccelerationStructure {
+    pub raw: vk::AccelerationStructureKHR,
+    pub address: vk::DeviceAddress,
+    pub name: String,
+    _storage: Buffer,
+    device: Arc<Device>,
+}
+
+impl Drop for AccelerationStructure {
+    fn drop(&mut self) {
+        unsafe { self.device.accel.destroy_acceleration_structure(self.raw, None) };
+    }
+}
+
+/// Triangles for a BLAS: `f32x3` positions at `vertex_stride` and `u32` indices, both by device address.
+#[derive(Debug, Clone, Copy)]
+pub struct TriangleGeometry {
+    pub vertex_address: vk::DeviceAddress,
+    pub vertex_stride: u64,
+    pub vertex_count: u32,
+    pub index_address: vk::DeviceAddress,
+    pub triangle_count: u32,
+    pub opaque: bool,
+}
+
+/// One TLAS instance: a BLAS placed by `transform`, with the id shaders read as `instanceCustomIndex`.
+#[derive(Clone, Copy)]
+pub struct TlasInstance<'a> {
+    pub blas: &'a AccelerationStructure,
+    pub transform: Mat4,
+    pub custom_index: u32,
+    pub mask: u8,
+}
+
+/// `VkAccelerationStructureInstanceKHR` as plain bytes (ash's own has unions and bitfields).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct InstanceRecord {
+    /// 3x4 row-major (`VkTransformMatrixKHR`); glam is column-major, so this is the transpose's first 12.
+    transform: [f32; 12],
+    custom_index_and_mask: u32,
+    sbt_offset_and_flags: u32,
+    blas_address: u64,
+}
+
+fn instance_record(instance: &TlasInstance<'_>) -> Result<InstanceRecord> {
+    if instance.custom_index >= 1 << 24 {
+        bail!("TLAS instance custom index {} does not fit in 24 bits", instance.custom_index);
+    }
+    let rows = instance.transform.transpose().to_cols_array();
+    let mut transform = [0.0; 12];
+    transform.copy_from_slice(&rows[..12]);
+    let flags = vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw();
+    Ok(InstanceRecord {
+        transform,
+        custom_index_and_mask: instance.custom_index | (u32::from(instance.mask) << 24),
+        sbt_offset_and_flags: flags << 24,
+        blas_address: instance.blas.address,
+    })
+}
+
+impl AccelerationStructure {
+    /// Builds a bottom-level structure over triangle geometries and waits for it.
+    pub fn build_blas(device: &Arc<Device>, name: &str, geometries: &[TriangleGeometry]) -> Result<Self> {
+        if geometries.is_empty() {
+            bail!("BLAS \"{name}\": no geometry");
+        }
+        let raw_geometries: Vec<vk::AccelerationStructureGeometryKHR> = geometries
+            .iter()
+            .map(|g| {
+                let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+                    .vertex_format(vk::Format::R32G32B32_SFLOAT)
+                    .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: g.vertex_address })
+                    .vertex_stride(g.vertex_stride)
+                    .max_vertex(g.vertex_count.saturating_sub(1))
+                    .index_type(vk::IndexType::UINT32)
+                    .index_data(vk::DeviceOrHostAddressConstKHR { device_address: g.index_address });
+                vk::AccelerationStructureGeometryKHR::default()
+                    .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+                    .geometry(vk::AccelerationStructureGeometryDataKHR { triangles })
+                    .flags(if g.opaque { vk::GeometryFlagsKHR::OPAQUE } else { vk::GeometryFlagsKHR::empty() })
+            })
+            .collect();
+        let counts: Vec<u32> = geometries.iter().map(|g| g.triangle_count).collect();
+        Self::build(device, name, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, &raw_geometries, &counts)
+    }
+
+    /// Builds a top-level structure over instances and waits for it.
+    pub fn build_tlas(device: &Arc<Device>, name: &str, instances: &[TlasInstance<'_>]) -> Result<Self> {
+        let records = instances.iter().map(instance_record).collect::<Result<Vec<_>>>()?;
+        // An empty scene still gets a valid (empty) TLAS: one dummy record keeps the buffer non-empty.
+        let bytes: Vec<InstanceRecord> =
+            if records.is_empty() { vec![bytemuck::Zeroable::zeroed()] } else { records.clone() };
+        // Instance data must be 16-byte aligned (VUID-vkCmdBuildAccelerationStructuresKHR-pInfos-03715).
+        let instance_buffer = Buffer::with_data(device, &format!("{name} instances"), &bytes, BUILD_INPUT_USAGE, 16)?;
+        let instances_data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
+            .array_of_pointers(false)
+            .data(vk::DeviceOrHostAddressConstKHR { device_address: instance_buffer.address });
+        let geometry = [vk::AccelerationStructureGeometryKHR::default()
+            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+            .geometry(vk::AccelerationStructureGeometryDataKHR { instances: instances_data })];
+        Self::build(device, name, vk::AccelerationStructureTypeKHR::TOP_LEVEL, &geometry, &[records.len() as u32])
+    }
+
+    fn build(
+        device: &Arc<Device>,
+        name: &str,
+        kind: vk::AccelerationStructureTypeKHR,
+        geometries: &[vk::AccelerationStructureGeometryKHR<'_>],
+        primitive_counts: &[u32],
+    ) -> Result<Self> {
+        let mut build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(kind)
+            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(geometries);
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        unsafe {
+            device.accel.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &build_info,
+                primitive_counts,
+                &mut sizes,
+            )
+        };
+        let storage = Buffer::new(
+            device,
+            &format!("{name} storage"),
+            sizes.acceleration_structure_size,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+            256, // VUID-VkAccelerationStructureCreateInfoKHR-offset-03734: offset multiple of 256
+        )?;
+        let create_info = vk::AccelerationStructureCreateInfoKHR::default()
+            .buffer(storage.raw)
+            .size(sizes.acceleration_structure_size)
+            .ty(kind);
+        let raw = unsafe { device.accel.create_acceleration_structure(&create_info, None) }
+            .with_context(|| format!("vkCreateAccelerationStructureKHR \"{name}\""))?;
+        device.set_name(raw, name);
+        let address = unsafe {
+            device.accel.get_acceleration_structure_device_address(
+                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
+            )
+        };
+        let structure = Self { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() };
+
+        let scratch_alignment = device.limits.min_scratch_offset_alignment;
+        let scratch = Buffer::new(
+            device,
+            &format!("{name} scratch"),
+            sizes.build_scratch_size.max(1),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+            scratch_alignment,
+        )?;
+        build_info = build_info
+            .dst_acceleration_structure(raw)
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address });
+        let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = primitive_counts
+            .iter()
+            .map(|&count| vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count))
+            .collect();
+        submit_and_wait(device, &format!("build {name}"), |cmd| {
+            unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[build_info], &[&ranges]) };
+            // Make the build visible to later builds and to ray queries in shaders.
+            memory_barrier(
+                device,
+                cmd,
+                Access::AS_BUILD_WRITE,
+                Access {
+                    stage: Access::AS_BUILD_READ.stage | Access::AS_COMPUTE_READ.stage,
+                    access: vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
+                },
+            );
+            Ok(())
+        })?;
+        drop(scratch);
+        Ok(structure)
+    }
+}

@@ -1,0 +1,37 @@
+//! A ready-to-use GPU: instance (with validation when asked) and the selected device.
+use super::device::Device;
+use super::instance::{Instance, InstanceOptions};
+use super::validation::ValidationLog;
+use anyhow::Result;
+use std::sync::Arc;
+
+/// What to create.
+#[derive(Debug, Clone, Default)]
+pub struct GpuOptions {
+    pub validation: bool,
+    /// Print validation messages to stderr as they arrive.
+    pub echo_messages: bool,
+    /// `--device NAME|INDEX`.
+    pub device: Option<String>,
+}
+
+/// The instance and device; clone the `Arc<Device>` to create resources.
+pub struct Gpu {
+    pub device: Arc<Device>,
+    log: Arc<ValidationLog>,
+}
+
+impl Gpu {
+    pub fn new(options: &GpuOptions) -> Result<Self> {
+        let instance =
+            Instance::new(&InstanceOptions { validation: options.validation, echo_messages: options.echo_messages })?;
+        let log = instance.validation_log();
+        let device = Device::new(instance, options.device.as_deref())?;
+        Ok(Self { device, log })
+    }
+
+    /// The validation log; keep it to check messages reported during teardown, after the `Gpu` is gone.
+    pub fn validation_log(&self) -> Arc<ValidationLog> {
+        self.log.clone()
+    }
+}

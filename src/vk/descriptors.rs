@@ -1,0 +1,101 @@
+//! Descriptor sets: each set has a small pool of its own sized for its bindings, and a writer that updates
+//! buffers, images and acceleration structures by binding number.
+use super::device::Device;
+use super::memory::{Buffer, Image};
+use super::pipeline::Binding;
+use anyhow::{Context as _, Result};
+use ash::vk;
+use std::sync::Arc;
+
+pub struct DescriptorSet {
+    pub raw: vk::DescriptorSet,
+    pool: vk::DescriptorPool,
+    device: Arc<Device>,
+}
+
+impl DescriptorSet {
+    pub fn new(
+        device: &Arc<Device>,
+        name: &str,
+        layout: vk::DescriptorSetLayout,
+        bindings: &[Binding],
+    ) -> Result<Self> {
+        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+        for b in bindings {
+            match sizes.iter_mut().find(|s| s.ty == b.kind) {
+                Some(size) => size.descriptor_count += b.count,
+                None => sizes.push(vk::DescriptorPoolSize { ty: b.kind, descriptor_count: b.count }),
+            }
+        }
+        let info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
+        let pool = unsafe { device.raw.create_descriptor_pool(&info, None) }
+            .with_context(|| format!("vkCreateDescriptorPool for {name}"))?;
+        device.set_name(pool, &format!("{name} pool"));
+        let layouts = [layout];
+        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+        let raw = match unsafe { device.raw.allocate_descriptor_sets(&alloc) } {
+            Ok(sets) => sets[0],
+            Err(e) => {
+                unsafe { device.raw.destroy_descriptor_pool(pool, None) };
+                return Err(e).with_context(|| format!("vkAllocateDescriptorSets for {name}"));
+            }
+        };
+        device.set_name(raw, name);
+        Ok(Self { raw, pool, device: device.clone() })
+    }
+
+    /// Points `binding` at a whole storage buffer.
+    pub fn storage_buffer(&self, binding: u32, buffer: &Buffer) -> &Self {
+        self.buffer(binding, vk::DescriptorType::STORAGE_BUFFER, buffer)
+    }
+
+    pub fn uniform_buffer(&self, binding: u32, buffer: &Buffer) -> &Self {
+        self.buffer(binding, vk::DescriptorType::UNIFORM_BUFFER, buffer)
+    }
+
+    fn buffer(&self, binding: u32, kind: vk::DescriptorType, buffer: &Buffer) -> &Self {
+        let info = [vk::DescriptorBufferInfo::default().buffer(buffer.raw).offset(0).range(vk::WHOLE_SIZE)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.raw)
+            .dst_binding(binding)
+            .descriptor_type(kind)
+            .buffer_info(&info);
+        unsafe { self.device.raw.update_descriptor_sets(&[write], &[]) };
+        self
+    }
+
+    /// Points `binding` at a storage image in `GENERAL` layout.
+    pub fn storage_image(&self, binding: u32, image: &Image) -> &Self {
+        let info = [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.raw)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+            .image_info(&info);
+        unsafe { self.device.raw.update_descriptor_sets(&[write], &[]) };
+        self
+    }
+
+    /// Points `binding` at a top-level acceleration structure.
+    pub fn acceleration_structure(&self, binding: u32, tlas: vk::AccelerationStructureKHR) -> &Self {
+        let structures = [tlas];
+        let mut as_info =
+            vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);
+        // The count is not derived from a slice here: the structures travel in the pushed extension struct.
+        let mut write = vk::WriteDescriptorSet::default()
+            .dst_set(self.raw)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+            .push_next(&mut as_info);
+        write.descriptor_count = 1;
+        unsafe { self.device.raw.update_descriptor_sets(&[write], &[]) };
+        self
+    }
+}
+
+impl Drop for DescriptorSet {
+    fn drop(&mut self) {
+        // Destroying the pool frees its set.
+        unsafe { self.device.raw.destroy_descriptor_pool(self.pool, None) };
+    }
+}

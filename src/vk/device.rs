@@ -1,0 +1,379 @@
+//! Physical device selection (ray queries required; discrete, then integrated, then CPU) and the logical device
+//! that owns the queue, the allocator and the extension loaders.
+use super::instance::{version_string, Instance, API_VERSION};
+use anyhow::{anyhow, bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::CStr;
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// Device extensions strata cannot run without. Deferred host operations is required by
+/// `VK_KHR_acceleration_structure` (Vulkan spec, extension dependencies).
+pub const REQUIRED_EXTENSIONS: [&CStr; 3] =
+    [ash::khr::acceleration_structure::NAME, ash::khr::ray_query::NAME, ash::khr::deferred_host_operations::NAME];
+
+/// One physical device as `strata info` and device selection see it.
+#[derive(Debug, Clone)]
+pub struct DeviceReport {
+    /// Position in `vkEnumeratePhysicalDevices` order (what `--device INDEX` means).
+    pub index: usize,
+    pub name: String,
+    pub device_type: vk::PhysicalDeviceType,
+    pub api_version: u32,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub ray_query: bool,
+    /// What the device lacks for strata; empty when it qualifies.
+    pub missing: Vec<String>,
+    pub handle: vk::PhysicalDevice,
+}
+
+impl DeviceReport {
+    pub fn qualifies(&self) -> bool {
+        self.missing.is_empty()
+    }
+
+    pub fn type_name(&self) -> &'static str {
+        match self.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+            vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+            vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+            vk::PhysicalDeviceType::CPU => "CPU",
+            _ => "other",
+        }
+    }
+
+    fn preference(&self) -> u32 {
+        match self.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 3,
+            _ => 4,
+        }
+    }
+
+    pub fn api_version_string(&self) -> String {
+        version_string(self.api_version)
+    }
+}
+
+/// Every physical device with what it supports and lacks.
+pub fn enumerate_devices(instance: &Instance) -> Result<Vec<DeviceReport>> {
+    let physicals = unsafe { instance.raw.enumerate_physical_devices() }.context("vkEnumeratePhysicalDevices")?;
+    physicals.into_iter().enumerate().map(|(index, handle)| report_device(instance, index, handle)).collect()
+}
+
+fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) -> Result<DeviceReport> {
+    let raw = &instance.raw;
+    let properties = unsafe { raw.get_physical_device_properties(handle) };
+    let name = properties.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let extensions = unsafe { raw.enumerate_device_extension_properties(handle) }
+        .with_context(|| format!("vkEnumerateDeviceExtensionProperties for {name}"))?;
+    let has = |n: &CStr| extensions.iter().any(|e| e.extension_name_as_c_str().ok() == Some(n));
+
+    let mut missing = Vec::new();
+    if properties.api_version < API_VERSION {
+        missing.push(format!("Vulkan 1.3 (has {})", version_string(properties.api_version)));
+    }
+    for ext in REQUIRED_EXTENSIONS {
+        if !has(ext) {
+            missing.push(ext.to_string_lossy().into_owned());
+        }
+    }
+
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let (mut driver_name, mut driver_info) = (String::new(), String::new());
+    if properties.api_version >= vk::API_VERSION_1_2 {
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { raw.get_physical_device_properties2(handle, &mut props2) };
+        driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    }
+
+    let mut ray_query = false;
+    if properties.api_version >= API_VERSION {
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
+        // Only chain extension structures the device knows (VUID-VkPhysicalDeviceFeatures2-pNext-pNext).
+        if has(ash::khr::acceleration_structure::NAME) {
+            features = features.push_next(&mut accel);
+        }
+        if has(ash::khr::ray_query::NAME) {
+            features = features.push_next(&mut rq);
+        }
+        unsafe { raw.get_physical_device_features2(handle, &mut features) };
+        let base = unsafe { raw.get_physical_device_features(handle) };
+        let checks = [
+            (v12.buffer_device_address, "feature bufferDeviceAddress"),
+            (v12.scalar_block_layout, "feature scalarBlockLayout"),
+            (v12.runtime_descriptor_array, "feature runtimeDescriptorArray"),
+            (v12.descriptor_binding_partially_bound, "feature descriptorBindingPartiallyBound"),
+            (v12.descriptor_binding_variable_descriptor_count, "feature descriptorBindingVariableDescriptorCount"),
+            (v12.shader_sampled_image_array_non_uniform_indexing, "feature shaderSampledImageArrayNonUniformIndexing"),
+            (v12.host_query_reset, "feature hostQueryReset"),
+            (base.shader_int64, "feature shaderInt64"),
+            (v13.dynamic_rendering, "feature dynamicRendering"),
+            (v13.synchronization2, "feature synchronization2"),
+            (accel.acceleration_structure, "feature accelerationStructure"),
+            (rq.ray_query, "feature rayQuery"),
+        ];
+        for (value, label) in checks {
+            if value == vk::FALSE && !missing.iter().any(|m| label.ends_with(m.as_str())) {
+                missing.push(label.to_string());
+            }
+        }
+        ray_query = rq.ray_query == vk::TRUE;
+        // The extension names already say what is missing when the extension itself is absent.
+        if !has(ash::khr::ray_query::NAME) {
+            missing.retain(|m| m != "feature rayQuery");
+        }
+        if !has(ash::khr::acceleration_structure::NAME) {
+            missing.retain(|m| m != "feature accelerationStructure");
+        }
+    }
+    if queue_family_index(instance, handle).is_none() {
+        missing.push("a queue family with graphics and compute".into());
+    }
+    Ok(DeviceReport {
+        index,
+        name,
+        device_type: properties.device_type,
+        api_version: properties.api_version,
+        driver_name,
+        driver_info,
+        ray_query,
+        missing,
+        handle,
+    })
+}
+
+fn queue_family_index(instance: &Instance, handle: vk::PhysicalDevice) -> Option<u32> {
+    let families = unsafe { instance.raw.get_physical_device_queue_family_properties(handle) };
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE))
+        .map(|i| i as u32)
+}
+
+/// Picks a device: the one `selector` names (an index, or a case-insensitive part of the name), else the most
+/// preferred qualifying one. Errors list every device and what it lacks.
+pub fn select_device(reports: &[DeviceReport], selector: Option<&str>) -> Result<usize> {
+    let listing = || {
+        let mut s = String::new();
+        for r in reports {
+            let status = if r.qualifies() { "ok".to_string() } else { format!("lacks {}", r.missing.join(", ")) };
+            s.push_str(&format!(
+                "\n  [{}] {} ({}, Vulkan {}): {status}",
+                r.index,
+                r.name,
+                r.type_name(),
+                r.api_version_string()
+            ));
+        }
+        if reports.is_empty() {
+            s.push_str("\n  (no Vulkan devices found)");
+        }
+        s
+    };
+    if let Some(sel) = selector.map(str::trim).filter(|s| !s.is_empty()) {
+        let chosen: Vec<&DeviceReport> = match sel.parse::<usize>() {
+            Ok(i) => reports.iter().filter(|r| r.index == i).collect(),
+            Err(_) => {
+                let needle = sel.to_lowercase();
+                reports.iter().filter(|r| r.name.to_lowercase().contains(&needle)).collect()
+            }
+        };
+        let report = match chosen.as_slice() {
+            [] => bail!("--device {sel:?} matches no Vulkan device; the devices are:{}", listing()),
+            [one] => *one,
+            many => bail!(
+                "--device {sel:?} matches {} devices ({}); use an index; the devices are:{}",
+                many.len(),
+                many.iter().map(|r| r.name.as_str()).collect::<Vec<_>>().join(", "),
+                listing()
+            ),
+        };
+        if !report.qualifies() {
+            bail!("device [{}] {} cannot run strata; the devices are:{}", report.index, report.name, listing());
+        }
+        return Ok(report.index);
+    }
+    reports.iter().filter(|r| r.qualifies()).min_by_key(|r| (r.preference(), r.index)).map(|r| r.index).ok_or_else(
+        || {
+            anyhow!(
+                "no Vulkan device supports what strata needs (Vulkan 1.3 with ray queries); \
+                 run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query; the devices are:{}",
+                listing()
+            )
+        },
+    )
+}
+
+/// Limits strata reads often.
+#[derive(Debug, Clone, Copy)]
+pub struct DeviceLimits {
+    pub min_scratch_offset_alignment: u64,
+    pub max_image_dimension_2d: u32,
+    pub timestamp_period_ns: f32,
+    pub min_storage_buffer_offset_alignment: u64,
+}
+
+/// The logical device and everything bound to its lifetime. Resources hold an `Arc<Device>`; it is destroyed
+/// when the last one goes, after the allocator and before the instance (which it keeps alive).
+pub struct Device {
+    pub raw: ash::Device,
+    pub physical: vk::PhysicalDevice,
+    pub report: DeviceReport,
+    pub limits: DeviceLimits,
+    pub queue_family: u32,
+    queue: Mutex<vk::Queue>,
+    pub accel: ash::khr::acceleration_structure::Device,
+    pub debug_utils: Option<ash::ext::debug_utils::Device>,
+    allocator: Mutex<ManuallyDrop<Allocator>>,
+    pub(crate) command_pool: Mutex<vk::CommandPool>,
+    pub instance: Arc<Instance>,
+}
+
+impl Device {
+    /// Creates the logical device on the selected physical device with every feature strata needs.
+    pub fn new(instance: Arc<Instance>, selector: Option<&str>) -> Result<Arc<Self>> {
+        let reports = enumerate_devices(&instance)?;
+        let index = select_device(&reports, selector)?;
+        let report = reports[index].clone();
+        let physical = report.handle;
+        let queue_family = queue_family_index(&instance, physical)
+            .ok_or_else(|| anyhow!("{}: no graphics+compute queue", report.name))?;
+
+        let mut accel_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut accel_props);
+        unsafe { instance.raw.get_physical_device_properties2(physical, &mut props2) };
+        let props = props2.properties;
+        let limits = DeviceLimits {
+            min_scratch_offset_alignment: u64::from(accel_props.min_acceleration_structure_scratch_offset_alignment)
+                .max(1),
+            max_image_dimension_2d: props.limits.max_image_dimension2_d,
+            timestamp_period_ns: props.limits.timestamp_period,
+            min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
+        };
+
+        let priorities = [1.0f32];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let extensions: Vec<*const std::ffi::c_char> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
+            .buffer_device_address(true)
+            .scalar_block_layout(true)
+            .descriptor_indexing(true)
+            .runtime_descriptor_array(true)
+            .shader_sampled_image_array_non_uniform_indexing(true)
+            .descriptor_binding_partially_bound(true)
+            .descriptor_binding_variable_descriptor_count(true)
+            .host_query_reset(true);
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let base_features = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+        let mut features = vk::PhysicalDeviceFeatures2::default()
+            .features(base_features)
+            .push_next(&mut v12)
+            .push_next(&mut v13)
+            .push_next(&mut accel)
+            .push_next(&mut rq);
+        let create_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_info)
+            .enabled_extension_names(&extensions)
+            .push_next(&mut features);
+        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
+            .with_context(|| format!("vkCreateDevice on {}", report.name))?;
+        let queue = unsafe { raw.get_device_queue(queue_family, 0) };
+
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.raw.clone(),
+            device: raw.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            // Without it binding device-address buffers is invalid (VUID-vkBindBufferMemory-bufferDeviceAddress-03339).
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        });
+        let allocator = match allocator {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { raw.destroy_device(None) };
+                return Err(anyhow!(e)).context("creating the memory allocator");
+            }
+        };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+        let command_pool = match unsafe { raw.create_command_pool(&pool_info, None) } {
+            Ok(p) => p,
+            Err(e) => {
+                drop(allocator);
+                unsafe { raw.destroy_device(None) };
+                return Err(e).context("vkCreateCommandPool");
+            }
+        };
+        let accel = ash::khr::acceleration_structure::Device::new(&instance.raw, &raw);
+        let debug_utils =
+            instance.debug_utils.as_ref().map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
+        let device = Arc::new(Self {
+            raw,
+            physical,
+            report,
+            limits,
+            queue_family,
+            queue: Mutex::new(queue),
+            accel,
+            debug_utils,
+            allocator: Mutex::new(ManuallyDrop::new(allocator)),
+            command_pool: Mutex::new(command_pool),
+            instance,
+        });
+        device.set_name(device.raw.handle(), &format!("strata device ({})", device.report.name));
+        device.set_name(queue, "strata queue");
+        device.set_name(command_pool, "strata command pool");
+        Ok(device)
+    }
+
+    /// Gives a Vulkan object a debug-utils name (what validation messages and RenderDoc show).
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(debug_utils) = &self.debug_utils else { return };
+        let Ok(cname) = std::ffi::CString::new(name.replace('\0', " ")) else { return };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&cname);
+        // Naming is best effort: a failure here must never fail a render.
+        let _ = unsafe { debug_utils.set_debug_utils_object_name(&info) };
+    }
+
+    pub fn allocator(&self) -> MutexGuard<'_, ManuallyDrop<Allocator>> {
+        self.allocator.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
+        self.queue.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Waits until the device is idle (used before teardown and after errors).
+    pub fn wait_idle(&self) -> Result<()> {
+        let _queue = self.queue();
+        unsafe { self.raw.device_wait_idle() }.context("vkDeviceWaitIdle")
+    }
+}
+
+impl Drop for Device {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.raw.device_wait_idle();
+            let pool = *self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner());
+            self.raw.destroy_command_pool(pool, None);
+            // The allocator frees its memory blocks; it must go before the device.
+            ManuallyDrop::drop(self.allocator.get_mut().unwrap_or_else(|p| p.into_inner()));
+            self.raw.destroy_device(None);
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! Thin owners of Vulkan objects, one file per concept. Knows nothing about scenes.
+pub mod accel;
+pub mod commands;
+pub mod context;
+pub mod descriptors;
+pub mod device;
+pub mod instance;
+pub mod memory;
+pub mod pipeline;
+pub mod readback;
+pub mod validation;
+
+pub use context::{Gpu, GpuOptions};
+pub use device::Device;
+pub use memory::{Buffer, Image, MemoryLocation};

@@ -1,0 +1,265 @@
+//! Pipelines built from the embedded SPIR-V: shader modules, one descriptor-set layout and push-constant range
+//! per pipeline, compute pipelines and dynamic-rendering graphics pipelines. A pass owns its pipeline.
+use super::descriptors::DescriptorSet;
+use super::device::Device;
+use anyhow::{anyhow, Context as _, Result};
+use ash::vk;
+use std::ffi::CStr;
+use std::sync::Arc;
+
+const ENTRY: &CStr = c"main";
+
+/// The SPIR-V words of an embedded shader (`shaders::ALL`), checked for the magic number.
+pub fn spirv_words(name: &str, bytes: &[u8]) -> Result<Vec<u32>> {
+    ash::util::read_spv(&mut std::io::Cursor::new(bytes)).with_context(|| format!("shader {name}: not valid SPIR-V"))
+}
+
+/// A shader module that destroys itself.
+pub struct ShaderModule {
+    pub raw: vk::ShaderModule,
+    device: Arc<Device>,
+}
+
+impl ShaderModule {
+    pub fn new(device: &Arc<Device>, name: &str, spirv: &[u8]) -> Result<Self> {
+        let words = spirv_words(name, spirv)?;
+        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        let raw = unsafe { device.raw.create_shader_module(&info, None) }
+            .with_context(|| format!("vkCreateShaderModule {name}"))?;
+        device.set_name(raw, name);
+        Ok(Self { raw, device: device.clone() })
+    }
+}
+
+impl Drop for ShaderModule {
+    fn drop(&mut self) {
+        unsafe { self.device.raw.destroy_shader_module(self.raw, None) };
+    }
+}
+
+/// One descriptor binding of a pipeline's single set.
+#[derive(Debug, Clone, Copy)]
+pub struct Binding {
+    pub binding: u32,
+    pub kind: vk::DescriptorType,
+    pub count: u32,
+}
+
+impl Binding {
+    pub const fn new(binding: u32, kind: vk::DescriptorType) -> Self {
+        Self { binding, kind, count: 1 }
+    }
+}
+
+/// A pipeline, its layout and its descriptor-set layout (set 0).
+pub struct Pipeline {
+    pub raw: vk::Pipeline,
+    pub layout: vk::PipelineLayout,
+    pub set_layout: vk::DescriptorSetLayout,
+    pub bind_point: vk::PipelineBindPoint,
+    pub bindings: Vec<Binding>,
+    pub push_constant_size: u32,
+    pub name: String,
+    device: Arc<Device>,
+}
+
+/// Fixed state of a graphics pipeline; viewport and scissor are dynamic.
+pub struct GraphicsDesc<'a> {
+    pub name: &'a str,
+    pub vertex: (&'a str, &'a [u8]),
+    pub fragment: (&'a str, &'a [u8]),
+    pub bindings: &'a [Binding],
+    pub push_constant_size: u32,
+    pub vertex_bindings: &'a [vk::VertexInputBindingDescription],
+    pub vertex_attributes: &'a [vk::VertexInputAttributeDescription],
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: Option<vk::Format>,
+    /// Additive blending on every colour attachment (else replace).
+    pub additive_blend: bool,
+    pub cull_mode: vk::CullModeFlags,
+}
+
+impl Pipeline {
+    fn new_layout(
+        device: &Arc<Device>,
+        name: &str,
+        bindings: &[Binding],
+        push_constant_size: u32,
+    ) -> Result<(vk::DescriptorSetLayout, vk::PipelineLayout)> {
+        let raw_bindings: Vec<vk::DescriptorSetLayoutBinding> = bindings
+            .iter()
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b.binding)
+                    .descriptor_type(b.kind)
+                    .descriptor_count(b.count)
+                    .stage_flags(vk::ShaderStageFlags::ALL)
+            })
+            .collect();
+        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw_bindings);
+        let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
+            .with_context(|| format!("vkCreateDescriptorSetLayout for {name}"))?;
+        device.set_name(set_layout, &format!("{name} set layout"));
+        let set_layouts = [set_layout];
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::ALL)
+            .offset(0)
+            .size(push_constant_size)];
+        let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_constant_size > 0 {
+            info = info.push_constant_ranges(&ranges);
+        }
+        match unsafe { device.raw.create_pipeline_layout(&info, None) } {
+            Ok(layout) => {
+                device.set_name(layout, &format!("{name} layout"));
+                Ok((set_layout, layout))
+            }
+            Err(e) => {
+                unsafe { device.raw.destroy_descriptor_set_layout(set_layout, None) };
+                Err(e).with_context(|| format!("vkCreatePipelineLayout for {name}"))
+            }
+        }
+    }
+
+    /// A compute pipeline from one embedded shader.
+    pub fn compute(
+        device: &Arc<Device>,
+        name: &str,
+        shader: (&str, &[u8]),
+        bindings: &[Binding],
+        push_constant_size: u32,
+    ) -> Result<Self> {
+        let module = ShaderModule::new(device, shader.0, shader.1)?;
+        let (set_layout, layout) = Self::new_layout(device, name, bindings, push_constant_size)?;
+        let mut pipeline = Self {
+            raw: vk::Pipeline::null(),
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            bindings: bindings.to_vec(),
+            push_constant_size,
+            name: name.to_owned(),
+            device: device.clone(),
+        };
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module.raw)
+            .name(ENTRY);
+        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+        pipeline.raw = unsafe { device.raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map_err(|(_, e)| anyhow!(e))
+            .with_context(|| format!("vkCreateComputePipelines {name}"))?[0];
+        device.set_name(pipeline.raw, name);
+        Ok(pipeline)
+    }
+
+    /// A graphics pipeline for dynamic rendering.
+    pub fn graphics(device: &Arc<Device>, desc: &GraphicsDesc<'_>) -> Result<Self> {
+        let vertex = ShaderModule::new(device, desc.vertex.0, desc.vertex.1)?;
+        let fragment = ShaderModule::new(device, desc.fragment.0, desc.fragment.1)?;
+        let (set_layout, layout) = Self::new_layout(device, desc.name, desc.bindings, desc.push_constant_size)?;
+        let mut pipeline = Self {
+            raw: vk::Pipeline::null(),
+            layout,
+            set_layout,
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            bindings: desc.bindings.to_vec(),
+            push_constant_size: desc.push_constant_size,
+            name: desc.name.to_owned(),
+            device: device.clone(),
+        };
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vertex.raw)
+                .name(ENTRY),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fragment.raw)
+                .name(ENTRY),
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(desc.vertex_bindings)
+            .vertex_attribute_descriptions(desc.vertex_attributes);
+        let input_assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(desc.cull_mode)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(desc.depth_format.is_some())
+            .depth_write_enable(desc.depth_format.is_some())
+            .depth_compare_op(vk::CompareOp::LESS);
+        let attachment = if desc.additive_blend {
+            vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(true)
+                .src_color_blend_factor(vk::BlendFactor::ONE)
+                .dst_color_blend_factor(vk::BlendFactor::ONE)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .color_write_mask(vk::ColorComponentFlags::RGBA)
+        } else {
+            vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA)
+        };
+        let attachments = vec![attachment; desc.color_formats.len()];
+        let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(desc.color_formats)
+            .depth_attachment_format(desc.depth_format.unwrap_or(vk::Format::UNDEFINED));
+        let info = [vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&input_assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering)];
+        pipeline.raw = unsafe { device.raw.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+            .map_err(|(_, e)| anyhow!(e))
+            .with_context(|| format!("vkCreateGraphicsPipelines {}", desc.name))?[0];
+        device.set_name(pipeline.raw, desc.name);
+        Ok(pipeline)
+    }
+
+    /// A descriptor set for this pipeline's layout, from a pool of its own.
+    pub fn new_descriptor_set(&self, name: &str) -> Result<DescriptorSet> {
+        DescriptorSet::new(&self.device, name, self.set_layout, &self.bindings)
+    }
+
+    /// Binds the pipeline, its descriptor set and push constants.
+    pub fn bind(&self, cmd: vk::CommandBuffer, set: Option<&DescriptorSet>, push_constants: &[u8]) {
+        let device = &self.device.raw;
+        unsafe {
+            device.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+            if let Some(set) = set {
+                device.cmd_bind_descriptor_sets(cmd, self.bind_point, self.layout, 0, &[set.raw], &[]);
+            }
+            if !push_constants.is_empty() {
+                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, 0, push_constants);
+            }
+        }
+    }
+}
+
+impl Drop for Pipeline {
+    fn drop(&mut self) {
+        unsafe {
+            self.device.raw.destroy_pipeline(self.raw, None);
+            self.device.raw.destroy_pipeline_layout(self.layout, None);
+            self.device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
