@@ -118,6 +118,7 @@ fn main() -> ExitCode {
 fn render(args: RenderArgs) -> Result<()> {
     // Check the output name before any work, so a typo costs nothing.
     strata::output::OutputFormat::from_path(&args.output)?;
+    strata::output::check_output_directory(&args.output)?;
     let scene = strata::load_scene(&args.scene)?;
     let started = std::time::Instant::now();
     let gpu = Gpu::new(&GpuOptions {
@@ -149,12 +150,21 @@ fn render(args: RenderArgs) -> Result<()> {
 }
 
 fn info(args: InfoArgs) -> Result<()> {
-    let loader = strata::vk::instance::loader_info()?;
-    println!("Vulkan loader: {}", strata::vk::instance::version_string(loader.loader_version));
-    match &loader.validation_layer {
-        Some(layer) => println!("Validation layer: {layer}"),
-        None => println!("Validation layer: not installed (run scripts/setup.sh for vulkan-validationlayers)"),
+    let mut text = String::new();
+    macro_rules! out {
+        ($($arg:tt)*) => {{
+            use std::fmt::Write as _;
+            let _ = writeln!(text, $($arg)*);
+        }};
     }
+    let loader = strata::vk::instance::loader_info()?;
+    out!("Vulkan loader: {}", strata::vk::instance::version_string(loader.loader_version));
+    match &loader.validation_layer {
+        Some(layer) => out!("Validation layer: {layer}"),
+        None => out!("Validation layer: not installed (run scripts/setup.sh for vulkan-validationlayers)"),
+    }
+    print_stdout(&text);
+    text.clear();
     let instance = strata::vk::instance::Instance::new(&strata::vk::instance::InstanceOptions {
         validation: args.validate && loader.validation_layer.is_some(),
         echo_messages: args.validate,
@@ -162,25 +172,34 @@ fn info(args: InfoArgs) -> Result<()> {
     .context("creating a Vulkan instance")?;
     let reports = strata::vk::device::enumerate_devices(&instance)?;
     if reports.is_empty() {
+        print_stdout(&text);
         bail!("no Vulkan devices found; run scripts/setup.sh to install Mesa's lavapipe");
     }
     let chosen = strata::vk::device::select_device(&reports, None).ok();
-    println!("Devices:");
+    out!("Devices:");
     for r in &reports {
         let marker = if Some(r.index) == chosen { " (default)" } else { "" };
-        println!("  [{}] {}{marker}", r.index, r.name);
-        println!("      type:      {}", r.type_name());
-        println!("      driver:    {} {}", r.driver_name, r.driver_info);
-        println!("      Vulkan:    {}", r.api_version_string());
-        println!("      ray query: {}", if r.ray_query { "yes" } else { "no" });
+        out!("  [{}] {}{marker}", r.index, r.name);
+        out!("      type:      {}", r.type_name());
+        out!("      driver:    {} {}", r.driver_name, r.driver_info);
+        out!("      Vulkan:    {}", r.api_version_string());
+        out!("      ray query: {}", if r.ray_query { "yes" } else { "no" });
         if r.qualifies() {
-            println!("      strata:    usable");
+            out!("      strata:    usable");
         } else {
-            println!("      strata:    not usable, lacks {}", r.missing.join(", "));
+            out!("      strata:    not usable, lacks {}", r.missing.join(", "));
         }
     }
+    print_stdout(&text);
     if chosen.is_none() {
         bail!("no device can run strata; run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query");
     }
     Ok(())
+}
+
+/// Prints to stdout; a closed pipe (`strata info | head`) is not an error.
+fn print_stdout(text: &str) {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    let _ = stdout.write_all(text.as_bytes()).and_then(|_| stdout.flush());
 }

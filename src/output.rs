@@ -107,34 +107,50 @@ pub fn write_frame_with_layers(path: &Path, frame: &Frame, layers: &[(&str, &Fra
     }
 }
 
+/// One EXR part: the beauty as `R,G,B,A`, each extra layer as `name.R, name.G, name.B, name.A` (the OpenEXR
+/// naming convention for layers within a part), all 32-bit float.
 fn write_exr(file: &mut std::fs::File, frame: &Frame, layers: &[(&str, &Frame)]) -> Result<()> {
     use exr::prelude::*;
     let size = Vec2(frame.width as usize, frame.height as usize);
-    let make_layer = |name: Option<&str>, f: &Frame| -> anyhow::Result<Layer<AnyChannels<FlatSamples>>> {
+    let mut channels = Vec::with_capacity(4 * (1 + layers.len()));
+    let mut add = |prefix: &str, f: &Frame| -> anyhow::Result<()> {
         if f.width != frame.width || f.height != frame.height {
-            bail!("layer {name:?} is {}x{}, the frame is {}x{}", f.width, f.height, frame.width, frame.height);
+            bail!("layer \"{prefix}\" is {}x{}, the frame is {}x{}", f.width, f.height, frame.width, frame.height);
         }
-        let channel =
-            |label: &str, i: usize| AnyChannel::new(label, FlatSamples::F32(f.pixels.iter().map(|p| p[i]).collect()));
-        // exr sorts channels by name; order given here does not matter.
-        let channels = AnyChannels::sort(SmallVec::from_vec(vec![
-            channel("R", 0),
-            channel("G", 1),
-            channel("B", 2),
-            channel("A", 3),
-        ]));
-        let mut attributes = LayerAttributes::default();
-        if let Some(name) = name {
-            attributes.layer_name = Some(Text::new_or_none(name).ok_or_else(|| anyhow!("bad layer name {name:?}"))?);
+        if !prefix.is_empty() && (prefix.contains('.') || !prefix.is_ascii()) {
+            bail!("layer name \"{prefix}\" must be ASCII without dots");
         }
-        Ok(Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, channels))
+        for (i, c) in ["R", "G", "B", "A"].into_iter().enumerate() {
+            let name = if prefix.is_empty() { c.to_string() } else { format!("{prefix}.{c}") };
+            let text = Text::new_or_none(name.as_str()).ok_or_else(|| anyhow!("bad channel name {name:?}"))?;
+            channels.push(AnyChannel::new(text, FlatSamples::F32(f.pixels.iter().map(|p| p[i]).collect())));
+        }
+        Ok(())
     };
-    let mut all = vec![make_layer(None, frame)?];
+    add("", frame)?;
     for (name, layer) in layers {
-        all.push(make_layer(Some(name), layer)?);
+        if name.is_empty() {
+            bail!("an extra layer needs a name");
+        }
+        add(name, layer)?;
     }
-    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions(size)), all);
+    // exr requires channels sorted by name.
+    let channels = AnyChannels::sort(SmallVec::from_vec(channels));
+    let layer = Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
+    let image = Image::from_layer(layer);
     image.write().to_buffered(std::io::BufWriter::new(file)).map_err(|e| anyhow!(e)).context("encoding EXR")
+}
+
+/// The directory `path` will be written into; an error if it does not exist (checked before long work).
+pub fn check_output_directory(path: &Path) -> Result<PathBuf> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        bail!("{}: the output directory {} does not exist", path.display(), dir.display());
+    }
+    Ok(dir)
 }
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -143,13 +159,7 @@ static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 /// is flushed to disk is the file renamed onto `path`. On any error the temporary file is removed and `path` is
 /// untouched.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    if !dir.is_dir() {
-        bail!("{}: the output directory {} does not exist", path.display(), dir.display());
-    }
+    let dir = check_output_directory(path)?;
     let file_name = path.file_name().ok_or_else(|| anyhow!("{}: not a file path", path.display()))?;
     let temp = dir.join(format!(
         ".{}.tmp-{}-{}",

@@ -13,6 +13,17 @@ use ash::vk;
 use glam::{Mat3, Mat4, Vec4};
 use std::sync::Arc;
 
+/// Unit vector towards the preview's key light, in view space; mirrors `KEY_DIRECTION` in `preview.frag`.
+pub const KEY_DIRECTION: glam::Vec3 = glam::Vec3::new(1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0);
+/// Ambient fraction of the preview shading; mirrors `AMBIENT` in `preview.frag`.
+pub const AMBIENT: f32 = 0.15;
+
+/// The preview's shading of a surface with unit view-space normal `n` facing the viewer (CPU twin of
+/// `preview.frag`): base · (ambient + (1 − ambient) · max(n·key, 0)).
+pub fn preview_shade(base_color: glam::Vec3, view_normal: glam::Vec3) -> glam::Vec3 {
+    base_color * (AMBIENT + (1.0 - AMBIENT) * view_normal.dot(KEY_DIRECTION).max(0.0))
+}
+
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 

@@ -119,6 +119,8 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
             (base.shader_int64, "feature shaderInt64"),
             (v13.dynamic_rendering, "feature dynamicRendering"),
             (v13.synchronization2, "feature synchronization2"),
+            // SPIR-V 1.6 compute shaders declare their size with LocalSizeId (VUID-RuntimeSpirv-LocalSizeId-06434).
+            (v13.maintenance4, "feature maintenance4"),
             (accel.acceleration_structure, "feature accelerationStructure"),
             (rq.ray_query, "feature rayQuery"),
         ];
@@ -274,7 +276,10 @@ impl Device {
             .descriptor_binding_partially_bound(true)
             .descriptor_binding_variable_descriptor_count(true)
             .host_query_reset(true);
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true)
+            .maintenance4(true);
         let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
         let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
         let base_features = vk::PhysicalDeviceFeatures::default().shader_int64(true);

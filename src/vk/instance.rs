@@ -46,12 +46,8 @@ pub fn loader_info() -> Result<LoaderInfo> {
         .context("vkEnumerateInstanceVersion")?
         .unwrap_or(vk::API_VERSION_1_0);
     let validation_layer = find_layer(&entry, VALIDATION_LAYER)?.map(|l| {
-        format!(
-            "{} {} (spec {})",
-            VALIDATION_LAYER.to_string_lossy(),
-            version_string(l.implementation_version),
-            version_string(l.spec_version)
-        )
+        // implementationVersion is a plain counter; the spec version says which Vulkan headers it follows.
+        format!("{} (Vulkan {})", VALIDATION_LAYER.to_string_lossy(), version_string(l.spec_version))
     });
     Ok(LoaderInfo { loader_version, validation_layer })
 }
@@ -139,7 +135,14 @@ impl Instance {
         if options.validation {
             create_info = create_info.push_next(&mut validation_features);
         }
-        let raw = unsafe { entry.create_instance(&create_info, None) }.context("vkCreateInstance")?;
+        let raw = match unsafe { entry.create_instance(&create_info, None) } {
+            Ok(raw) => raw,
+            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => bail!(
+                "vkCreateInstance: no Vulkan driver found (ERROR_INCOMPATIBLE_DRIVER); run scripts/setup.sh to \
+                 install Mesa's lavapipe, or check VK_DRIVER_FILES / VK_ICD_FILENAMES"
+            ),
+            Err(e) => return Err(e).context("vkCreateInstance"),
+        };
 
         let (debug_utils, messenger) = if has_debug_utils {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &raw);

@@ -17,19 +17,12 @@ pub struct AllowedMessage {
 }
 
 /// Messages the layer reports that are not bugs in strata. Each names its reason.
-pub const ALLOWED: &[AllowedMessage] = &[
-    AllowedMessage {
-        id: "UNASSIGNED-BestPractices-vkCreateInstance-specialuse-extension-debugging",
-        reason: "VK_EXT_debug_utils and VK_EXT_validation_features are enabled on purpose: they carry object names, \
+pub const ALLOWED: &[AllowedMessage] = &[AllowedMessage {
+    id: "UNASSIGNED-BestPractices-vkCreateInstance-specialuse-extension-debugging",
+    reason: "VK_EXT_debug_utils and VK_EXT_validation_features are enabled on purpose: they carry object names, \
                  the messenger and the validation settings themselves",
-        layer_version: "1.3.239",
-    },
-    AllowedMessage {
-        id: "UNASSIGNED-BestPractices-SpirvDeprecated_WorkgroupSize",
-        reason: "glslang always emits the WorkgroupSize built-in for local_size_*; a false positive",
-        layer_version: "1.3.239",
-    },
-];
+    layer_version: "1.3.239",
+}];
 
 /// One message as the layer reported it.
 #[derive(Debug, Clone)]

@@ -1,0 +1,196 @@
+//! The `strata` command as a user runs it: `info`, a real render of the shared Box sample checked against
+//! geometry and a CPU twin of the preview shading, and bad input that must fail cleanly without writing.
+use glam::Vec4Swizzles;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn strata(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_strata")).args(args).output().expect("run strata")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn samples() -> PathBuf {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples");
+    assert!(dir.is_dir(), "the shared glTF samples are missing at {}", dir.display());
+    dir
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("strata-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn info_lists_a_ray_query_device_and_the_layer() {
+    let out = strata(&["info"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "strata info failed: {}\n{text}", stderr(&out));
+    assert!(text.contains("Validation layer: VK_LAYER_KHRONOS_validation"), "{text}");
+    assert!(text.contains("ray query: yes"), "{text}");
+    assert!(text.contains("strata:    usable"), "{text}");
+}
+
+#[test]
+fn box_renders_where_its_geometry_projects_with_the_expected_shading() {
+    let dir = temp_dir("box");
+    let scene_path = samples().join("Box.gltf");
+    let png = dir.join("box.png");
+    let (width, height) = (320u32, 240u32);
+    let out = strata(&[
+        "render",
+        scene_path.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        &format!("{width}x{height}"),
+        "--background",
+        "0,0,1",
+        "--validate",
+    ]);
+    assert!(out.status.success(), "render failed:\n{}", stderr(&out));
+    let image = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(image.dimensions(), (width, height));
+
+    // Where the box must land: project its world-space vertices with the same camera.
+    let scene = strata::load_scene(&scene_path).unwrap();
+    let camera = scene.camera_or_default();
+    let view_from_world = camera.view_from_world();
+    let clip_from_world = camera.clip_from_view(width as f32 / height as f32) * view_from_world;
+    let (mut lo, mut hi) = (glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN));
+    let mut face_colors = Vec::new();
+    let base = scene.materials[0].base_color.xyz();
+    for instance in &scene.instances {
+        for p in &scene.meshes[instance.mesh].primitives {
+            for (&v, &n) in p.positions.iter().zip(&p.normals) {
+                let clip = clip_from_world * instance.world_from_object.transform_point3(v).extend(1.0);
+                let ndc = clip.xy() / clip.w;
+                let px = (ndc + 1.0) * 0.5 * glam::Vec2::new(width as f32, height as f32);
+                lo = lo.min(px);
+                hi = hi.max(px);
+                let view_normal = (view_from_world * instance.world_from_object).transform_vector3(n).normalize();
+                face_colors.push(strata::render::preview::preview_shade(base, view_normal));
+            }
+        }
+    }
+    // Covered pixels: anything not the pure-blue background.
+    let (mut cmin, mut cmax) = ((u32::MAX, u32::MAX), (0u32, 0u32));
+    let encode = |v: f32| (strata::output::linear_to_srgb(v) * 255.0 + 0.5).floor() as i32;
+    for (x, y, px) in image.enumerate_pixels() {
+        if px.0 == [0, 0, 255, 255] {
+            continue;
+        }
+        cmin = (cmin.0.min(x), cmin.1.min(y));
+        cmax = (cmax.0.max(x), cmax.1.max(y));
+        // Box.gltf's material is (0.8, 0, 0): green and blue stay exactly zero, red is one of the faces' shades.
+        assert_eq!((px[1], px[2], px[3]), (0, 0, 255), "pixel ({x},{y}) = {:?}", px.0);
+        let r = px[0] as i32;
+        assert!(
+            face_colors.iter().any(|c| (encode(c.x) - r).abs() <= 1),
+            "pixel ({x},{y}) red {r} is no face's shade {:?}",
+            face_colors.iter().map(|c| encode(c.x)).collect::<Vec<_>>()
+        );
+    }
+    // A pixel is covered when its centre (x + ½) is inside: the covered range matches the projection within 1 px.
+    for (axis, got_lo, got_hi) in [(0, cmin.0, cmax.0), (1, cmin.1, cmax.1)] {
+        assert!(
+            (got_lo as f32 + 0.5 - lo[axis]).abs() <= 1.0,
+            "axis {axis}: first covered {got_lo}, edge {}",
+            lo[axis]
+        );
+        assert!((got_hi as f32 + 0.5 - hi[axis]).abs() <= 1.0, "axis {axis}: last covered {got_hi}, edge {}", hi[axis]);
+    }
+}
+
+#[test]
+fn exr_output_holds_linear_radiance() {
+    let dir = temp_dir("exr");
+    let exr_path = dir.join("box.exr");
+    let scene_path = samples().join("Box.gltf");
+    let out = strata(&["render", scene_path.to_str().unwrap(), "-o", exr_path.to_str().unwrap(), "--size", "64x48"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &exr_path,
+        |size, _| (size.width(), vec![[0f32; 4]; size.width() * size.height()]),
+        |(w, px), pos, (r, g, b, a): (f32, f32, f32, f32)| px[pos.y() * *w + pos.x()] = [r, g, b, a],
+    )
+    .unwrap();
+    let pixels = &image.layer_data.channel_data.pixels.1;
+    // Linear: the reddest pixel is at most the base colour 0.8 (not its sRGB encoding 0.906).
+    let max_red = pixels.iter().map(|p| p[0]).fold(0.0, f32::max);
+    assert!(max_red > 0.3 && max_red <= 0.8 + 1e-6, "max red {max_red}");
+}
+
+#[test]
+fn bad_input_fails_clearly_and_writes_nothing() {
+    let dir = temp_dir("bad");
+    let box_gltf = samples().join("Box.gltf");
+    let box_gltf = box_gltf.to_str().unwrap();
+    let broken = dir.join("broken.gltf");
+    std::fs::write(&broken, "{ \"asset\": { \"version\": \"2.0\" }, \"meshes\": [ ").unwrap();
+    let png = dir.join("out.png");
+    let png_s = png.to_str().unwrap();
+    let jpg = dir.join("out.jpg");
+    let no_dir = dir.join("missing/out.png");
+    let obj = dir.join("scene.obj");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["render", "does-not-exist.gltf", "-o", png_s], "does-not-exist.gltf: no such file"),
+        (vec!["render", broken.to_str().unwrap(), "-o", png_s], "broken.gltf: not a valid glTF"),
+        (vec!["render", box_gltf, "-o", jpg.to_str().unwrap()], "unknown output extension \".jpg\""),
+        (vec!["render", box_gltf, "-o", no_dir.to_str().unwrap()], "does not exist"),
+        (vec!["render", box_gltf, "-o", png_s, "--size", "0x10"], "outside 1..=16384"),
+        (vec!["render", box_gltf, "-o", png_s, "--size", "99999x10"], "outside 1..=16384"),
+        (vec!["render", box_gltf, "-o", png_s, "--device", "no-such-gpu"], "matches no Vulkan device"),
+        (vec!["render", box_gltf, "-o", png_s, "--device", "7"], "matches no Vulkan device"),
+        (vec!["render", obj.to_str().unwrap(), "-o", png_s], "unknown scene extension"),
+    ];
+    for (args, expected) in cases {
+        let out = strata(&args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(stderr(&out).contains(expected), "{args:?}: stderr does not say {expected:?}:\n{}", stderr(&out));
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(leftovers, vec![std::ffi::OsString::from("broken.gltf")], "files were written");
+}
+
+#[test]
+fn a_missing_validation_layer_or_driver_says_to_run_setup() {
+    let box_gltf = samples().join("Box.gltf");
+    let dir = temp_dir("env");
+    let png = dir.join("out.png");
+    let empty_layers = dir.join("no-layers");
+    std::fs::create_dir_all(&empty_layers).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .args(["render", box_gltf.to_str().unwrap(), "-o", png.to_str().unwrap(), "--validate"])
+        .env("VK_LAYER_PATH", &empty_layers)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("scripts/setup.sh"), "{}", stderr(&out));
+    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .args(["info"])
+        .env("VK_DRIVER_FILES", dir.join("no-driver.json"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("scripts/setup.sh"), "{}", stderr(&out));
+    assert!(!png.exists());
+}
+
+#[test]
+fn help_teaches_every_command() {
+    for args in [vec!["--help"], vec!["render", "--help"], vec!["info", "--help"]] {
+        let out = strata(&args);
+        assert!(out.status.success());
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains("Usage:") && text.contains("Examples:") || args[0] == "info", "{args:?}:\n{text}");
+    }
+    let render_help = String::from_utf8_lossy(&strata(&["render", "--help"]).stdout).into_owned();
+    for option in ["--output", "--size", "--validate", "--device", "--background", "atomically"] {
+        assert!(render_help.contains(option), "render --help lacks {option}");
+    }
+}

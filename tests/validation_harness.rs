@@ -1,0 +1,107 @@
+//! The harness itself: it must catch a deliberately invalid call and a leaked object, and a clean run that
+//! creates and destroys every kind of object strata uses must end with zero messages.
+mod common;
+
+use ash::vk;
+use glam::Vec3;
+use strata::render::ray_probe::RayProbe;
+use strata::render::solid::SolidPass;
+use strata::vk::accel::{AccelerationStructure, TlasInstance, TriangleGeometry, BUILD_INPUT_USAGE};
+use strata::vk::{Buffer, Image, MemoryLocation};
+
+#[test]
+fn an_invalid_call_fails_the_harness() {
+    let gpu = common::GpuTest::new();
+    let device = gpu.device().clone();
+    // A buffer with no usage flags violates VUID-VkBufferCreateInfo-usage-requiredbitmask. lavapipe creates
+    // it anyway, so it can be destroyed again and the test process stays sound.
+    let info = vk::BufferCreateInfo::default().size(64).usage(vk::BufferUsageFlags::empty());
+    let buffer = unsafe { device.raw.create_buffer(&info, None) }.expect("lavapipe creates the buffer");
+    unsafe { device.raw.destroy_buffer(buffer, None) };
+    drop(device);
+    let report = gpu.finish().expect_err("the harness must fail on an invalid call");
+    assert!(report.contains("VUID-VkBufferCreateInfo-usage-requiredbitmask"), "report was:\n{report}");
+    assert!(report.contains("[ERROR]"), "report was:\n{report}");
+}
+
+#[test]
+fn a_leaked_object_is_reported_at_teardown() {
+    let gpu = common::GpuTest::new();
+    let device = gpu.device().clone();
+    let info = vk::BufferCreateInfo::default().size(64).usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    let leaked = unsafe { device.raw.create_buffer(&info, None) }.unwrap();
+    device.set_name(leaked, "deliberately leaked buffer");
+    drop(device);
+    let report = gpu.finish().expect_err("a leaked buffer must fail the harness");
+    assert!(report.contains("vkDestroyDevice"), "report was:\n{report}");
+    assert!(report.contains("deliberately leaked buffer"), "the report names the object:\n{report}");
+}
+
+#[test]
+fn creating_and_destroying_every_kind_of_object_is_clean() {
+    let gpu = common::GpuTest::new();
+    let device = gpu.device();
+    {
+        let storage = Buffer::new(
+            device,
+            "teardown storage",
+            1024,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+            1,
+        )
+        .unwrap();
+        let uploaded =
+            Buffer::device_local_with_data(device, "teardown upload", &[1u32, 2, 3, 4], BUILD_INPUT_USAGE, 16).unwrap();
+        let image = Image::new_2d(
+            device,
+            "teardown image",
+            vk::Format::R32G32B32A32_SFLOAT,
+            vk::Extent2D { width: 4, height: 4 },
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+        )
+        .unwrap();
+        let positions = [Vec3::ZERO, Vec3::X, Vec3::Y];
+        let vertices = Buffer::with_data(device, "teardown vertices", &positions, BUILD_INPUT_USAGE, 16).unwrap();
+        let indices = Buffer::with_data(device, "teardown indices", &[0u32, 1, 2], BUILD_INPUT_USAGE, 16).unwrap();
+        let blas = AccelerationStructure::build_blas(
+            device,
+            "teardown BLAS",
+            &[TriangleGeometry {
+                vertex_address: vertices.address,
+                vertex_stride: 12,
+                vertex_count: 3,
+                index_address: indices.address,
+                triangle_count: 1,
+                opaque: true,
+            }],
+        )
+        .unwrap();
+        let tlas = AccelerationStructure::build_tlas(
+            device,
+            "teardown TLAS",
+            &[TlasInstance { blas: &blas, transform: glam::Mat4::IDENTITY, custom_index: 0, mask: 0xff }],
+        )
+        .unwrap();
+        let empty_tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();
+        let probe = RayProbe::new(device).unwrap();
+        let solid = SolidPass::new(device, vk::Format::R8G8B8A8_UNORM, false).unwrap();
+        drop((storage, uploaded, image, vertices, indices, blas, tlas, empty_tlas, probe, solid));
+    }
+    let log = gpu.log().clone();
+    gpu.finish().unwrap();
+    let unexpected: Vec<String> =
+        log.messages().iter().filter(|m| m.allowed_by().is_none()).map(|m| m.to_string()).collect();
+    assert!(unexpected.is_empty(), "messages at teardown:\n{}", unexpected.join("\n"));
+}
+
+#[test]
+fn an_empty_tlas_is_a_valid_miss_everywhere() {
+    let gpu = common::GpuTest::new();
+    let device = gpu.device();
+    let tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();
+    let probe = RayProbe::new(device).unwrap();
+    let ray = strata::render::ray_probe::ProbeRay { origin: Vec3::ZERO, t_min: 0.0, direction: Vec3::Z, t_max: 1e9 };
+    let hits = probe.cast(&tlas, &[ray; 3]).unwrap();
+    assert!(hits.iter().all(|h| !h.is_hit()), "{hits:?}");
+}
