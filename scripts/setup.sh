@@ -84,4 +84,10 @@ if [ "$rq" != yes ]; then
   echo "setup: FAILED: lavapipe does not report VK_KHR_ray_query; strata needs a Mesa with ray queries (25.0+)" >&2
   exit 1
 fi
+# Rust is the user's (rustup); Debian 12's own cargo is too old for strata's dependencies.
+if command -v cargo >/dev/null; then
+  echo "setup: cargo:             $(cargo --version)"
+else
+  echo "setup: note: no cargo on PATH; install Rust 1.85 or newer (rustup) to build strata" >&2
+fi
 echo "setup: OK"

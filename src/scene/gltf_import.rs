@@ -2,7 +2,7 @@
 //! first camera. Every error names the file and what is wrong with it.
 use super::{Camera, Instance, Material, Mesh, Primitive, Projection, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::Path;
 
 /// Loads a `.gltf` or `.glb` file.
@@ -121,7 +121,14 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[gltf::buffer::Da
         Some(n) => n.map(|v| Vec3::from_array(v).normalize_or_zero()).collect(),
         None => Vec::new(),
     };
-    let mut primitive_out = Primitive { positions, normals, indices, material: primitive.material().index() };
+    let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+        Some(uv) => uv.into_f32().map(Vec2::from_array).collect(),
+        None => Vec::new(),
+    };
+    if !uvs.is_empty() && uvs.len() != positions.len() {
+        bail!("TEXCOORD_0 has {} entries for {} vertices", uvs.len(), positions.len());
+    }
+    let mut primitive_out = Primitive { positions, normals, uvs, indices, material: primitive.material().index() };
     if primitive_out.normals.len() != primitive_out.positions.len() {
         flatten_with_face_normals(&mut primitive_out);
     }
@@ -132,14 +139,19 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[gltf::buffer::Da
 fn flatten_with_face_normals(primitive: &mut Primitive) {
     let mut positions = Vec::with_capacity(primitive.indices.len());
     let mut normals = Vec::with_capacity(primitive.indices.len());
+    let mut uvs = Vec::new();
     for tri in primitive.indices.chunks_exact(3) {
         let [a, b, c] = [0, 1, 2].map(|k| primitive.positions[tri[k] as usize]);
         // Zero-area triangles get a zero normal rather than NaN.
         let n = (b - a).cross(c - a).normalize_or_zero();
         positions.extend([a, b, c]);
         normals.extend([n, n, n]);
+        if !primitive.uvs.is_empty() {
+            uvs.extend(tri.iter().map(|&i| primitive.uvs[i as usize]));
+        }
     }
     primitive.indices = (0..positions.len() as u32).collect();
     primitive.positions = positions;
     primitive.normals = normals;
+    primitive.uvs = uvs;
 }

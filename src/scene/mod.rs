@@ -1,9 +1,12 @@
 //! The CPU scene: meshes, materials, placed instances and the camera. Knows nothing about Vulkan.
 pub mod camera;
+pub mod gltf_export;
 pub mod gltf_import;
+pub mod library;
+pub mod shapes;
 
 pub use camera::{Camera, Projection};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
 /// A triangle list with per-vertex attributes (all the same length as `positions`).
@@ -11,6 +14,8 @@ use std::path::PathBuf;
 pub struct Primitive {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
+    /// TEXCOORD_0; empty when the mesh has none.
+    pub uvs: Vec<Vec2>,
     pub indices: Vec<u32>,
     pub material: Option<usize>,
 }
