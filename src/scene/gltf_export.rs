@@ -31,26 +31,31 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
                 bail!("mesh {}: empty primitive", mesh.name);
             }
             let mut attributes = serde_json::Map::new();
-            let (lo, hi) = p.positions.iter().fold(
-                (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
-                |(lo, hi), &v| (lo.min(v), hi.max(v)),
-            );
+            let (lo, hi) =
+                p.positions.iter().fold((glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)), |(lo, hi), &v| {
+                    (lo.min(v), hi.max(v))
+                });
             let view = push_view(&mut bin, bytemuck::cast_slice(&p.positions), ARRAY_BUFFER);
             accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": p.positions.len(),
                 "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}));
             attributes.insert("POSITION".into(), json!(accessors.len() - 1));
             if p.normals.len() == p.positions.len() {
                 let view = push_view(&mut bin, bytemuck::cast_slice(&p.normals), ARRAY_BUFFER);
-                accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": p.normals.len(), "type": "VEC3"}));
+                accessors.push(
+                    json!({"bufferView": view, "componentType": FLOAT, "count": p.normals.len(), "type": "VEC3"}),
+                );
                 attributes.insert("NORMAL".into(), json!(accessors.len() - 1));
             }
             if p.uvs.len() == p.positions.len() {
                 let view = push_view(&mut bin, bytemuck::cast_slice(&p.uvs), ARRAY_BUFFER);
-                accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": p.uvs.len(), "type": "VEC2"}));
+                accessors
+                    .push(json!({"bufferView": view, "componentType": FLOAT, "count": p.uvs.len(), "type": "VEC2"}));
                 attributes.insert("TEXCOORD_0".into(), json!(accessors.len() - 1));
             }
             let view = push_view(&mut bin, bytemuck::cast_slice(&p.indices), ELEMENT_ARRAY_BUFFER);
-            accessors.push(json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": p.indices.len(), "type": "SCALAR"}));
+            accessors.push(
+                json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": p.indices.len(), "type": "SCALAR"}),
+            );
             let mut primitive = json!({"attributes": attributes, "indices": accessors.len() - 1, "mode": 4});
             if let Some(m) = p.material {
                 primitive["material"] = json!(m);

@@ -8,8 +8,14 @@ use std::f32::consts::{PI, TAU};
 /// UVs run 0..`uv_scale` across it.
 pub fn plane(size: Vec2, uv_scale: Vec2, material: Option<usize>) -> Primitive {
     let (hx, hz) = (size.x * 0.5, size.y * 0.5);
-    let positions = vec![Vec3::new(-hx, 0.0, hz), Vec3::new(hx, 0.0, hz), Vec3::new(hx, 0.0, -hz), Vec3::new(-hx, 0.0, -hz)];
-    let uvs = vec![Vec2::new(0.0, 0.0), Vec2::new(uv_scale.x, 0.0), Vec2::new(uv_scale.x, uv_scale.y), Vec2::new(0.0, uv_scale.y)];
+    let positions =
+        vec![Vec3::new(-hx, 0.0, hz), Vec3::new(hx, 0.0, hz), Vec3::new(hx, 0.0, -hz), Vec3::new(-hx, 0.0, -hz)];
+    let uvs = vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(uv_scale.x, 0.0),
+        Vec2::new(uv_scale.x, uv_scale.y),
+        Vec2::new(0.0, uv_scale.y),
+    ];
     Primitive { positions, normals: vec![Vec3::Y; 4], uvs, indices: vec![0, 1, 2, 0, 2, 3], material }
 }
 
