@@ -13,7 +13,7 @@ use std::path::Path;
 pub fn load_scene(path: &Path) -> Result<scene::Scene> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("gltf") | Some("glb") => scene::gltf_import::load_gltf(path),
+        Some("gltf") | Some("glb") => scene::gltf_import::load_gltf(path, &Default::default()),
         Some(other) => bail!("{}: unknown scene extension \".{other}\" (use .gltf or .glb)", path.display()),
         None => bail!("{}: scene file has no extension (use .gltf or .glb)", path.display()),
     }

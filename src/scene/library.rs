@@ -2,7 +2,8 @@
 //! `tests/scenes.rs` checks that the committed files equal what this code writes.
 use super::camera::look_at;
 use super::shapes::{cuboid, plane, uv_sphere};
-use super::{Camera, Instance, Material, Mesh, Primitive, Projection, Scene};
+use super::surface::compute_surface_derivatives;
+use super::{Camera, Instance, Material, Mesh, Node, NodeTransform, Primitive, Projection, Scene};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
@@ -17,26 +18,41 @@ struct Builder {
 
 impl Builder {
     fn new(name: &str) -> Self {
-        Self {
-            scene: Scene {
-                source: PathBuf::from(format!("scenes/{name}.gltf")),
-                meshes: Vec::new(),
-                materials: Vec::new(),
-                instances: Vec::new(),
-                camera: None,
-            },
-        }
+        Self { scene: Scene { source: PathBuf::from(format!("scenes/{name}.gltf")), ..Default::default() } }
     }
 
     fn material(&mut self, name: &str, rgb: [f32; 3]) -> usize {
-        self.scene.materials.push(Material { name: name.into(), base_color: Vec4::new(rgb[0], rgb[1], rgb[2], 1.0) });
+        self.scene.materials.push(Material {
+            name: name.into(),
+            base_color: Vec4::new(rgb[0], rgb[1], rgb[2], 1.0),
+            metallic: 0.0,
+            roughness: 0.5,
+            ..Default::default()
+        });
         self.scene.materials.len() - 1
     }
 
-    fn place(&mut self, name: &str, primitive: Primitive, world_from_object: Mat4) {
+    fn place(&mut self, name: &str, mut primitive: Primitive, world_from_object: Mat4) {
+        compute_surface_derivatives(&mut primitive);
         self.scene.meshes.push(Mesh { name: name.into(), primitives: vec![primitive] });
         let mesh = self.scene.meshes.len() - 1;
-        self.scene.instances.push(Instance { name: name.into(), mesh, world_from_object });
+        let node = self.scene.nodes.len();
+        self.scene.nodes.push(Node {
+            name: name.into(),
+            parent: None,
+            children: Vec::new(),
+            transform: NodeTransform::Matrix(world_from_object),
+            mesh: Some(mesh),
+            camera: None,
+            light: None,
+        });
+        self.scene.roots.push(node);
+        self.scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
+    }
+
+    fn finish(mut self) -> Scene {
+        self.scene.cameras = self.scene.camera.iter().cloned().collect();
+        self.scene
     }
 
     fn camera(&mut self, eye: Vec3, target: Vec3, yfov_degrees: f32) {
@@ -72,5 +88,5 @@ pub fn showcase() -> Scene {
     );
     b.place("white sphere", uv_sphere(0.5, 48, 24, Some(white)), Mat4::from_translation(Vec3::new(-1.9, 0.5, -3.0)));
     b.camera(Vec3::new(0.0, 1.7, 5.5), Vec3::new(0.0, 0.5, -0.5), 40.0);
-    b.scene
+    b.finish()
 }

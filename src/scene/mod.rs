@@ -1,21 +1,42 @@
-//! The CPU scene: meshes, materials, placed instances and the camera. Knows nothing about Vulkan.
+//! The CPU scene: meshes, materials, textures, the node hierarchy with animations, cameras and lights.
+//! Knows nothing about Vulkan.
+pub mod animation;
 pub mod camera;
+pub mod gltf_accessors;
 pub mod gltf_export;
 pub mod gltf_import;
+pub mod gltf_uri;
 pub mod library;
+pub mod light;
+pub mod material;
 pub mod shapes;
+pub mod surface;
 
+pub use animation::{Animation, Channel, Interpolation, Property};
 pub use camera::{Camera, Projection};
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+pub use light::{Light, LightShape};
+pub use material::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
 use std::path::PathBuf;
 
-/// A triangle list with per-vertex attributes (all the same length as `positions`).
+/// A triangle list with per-vertex attributes. Optional attributes are empty when absent, else the same length
+/// as `positions`.
 #[derive(Debug, Clone, Default)]
 pub struct Primitive {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
-    /// TEXCOORD_0; empty when the mesh has none.
+    /// TANGENT (xyz, w = handedness ±1).
+    pub tangents: Vec<Vec4>,
+    /// TEXCOORD_0.
     pub uvs: Vec<Vec2>,
+    /// TEXCOORD_1.
+    pub uvs1: Vec<Vec2>,
+    /// COLOR_0 as linear RGBA (RGB inputs get alpha 1).
+    pub colors: Vec<Vec4>,
+    /// Surface derivatives Q_u = ∂P/∂u and Q_v = ∂P/∂v per vertex, unnormalized (Blinn 1978 needs |Q_u × Q_v|);
+    /// empty without UVs. Zero where the UVs are degenerate.
+    pub dpdu: Vec<Vec3>,
+    pub dpdv: Vec<Vec3>,
     pub indices: Vec<u32>,
     pub material: Option<usize>,
 }
@@ -32,36 +53,64 @@ pub struct Mesh {
     pub primitives: Vec<Primitive>,
 }
 
-#[derive(Debug, Clone)]
-pub struct Material {
-    pub name: String,
-    /// Linear RGBA base colour factor (glTF `pbrMetallicRoughness.baseColorFactor`).
-    pub base_color: Vec4,
+/// A node's local transform: glTF allows a matrix or TRS; only TRS can be animated (glTF 2.0 §3.5.2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum NodeTransform {
+    Matrix(Mat4),
+    Trs { translation: Vec3, rotation: Quat, scale: Vec3 },
 }
 
-impl Default for Material {
-    fn default() -> Self {
-        // glTF's default material: white (glTF 2.0 §3.9.6).
-        Self { name: "default".into(), base_color: Vec4::ONE }
+impl NodeTransform {
+    pub fn matrix(&self) -> Mat4 {
+        match *self {
+            NodeTransform::Matrix(m) => m,
+            NodeTransform::Trs { translation, rotation, scale } => {
+                Mat4::from_scale_rotation_translation(scale, rotation, translation)
+            }
+        }
     }
 }
 
-/// A mesh placed in the world by a node.
+#[derive(Debug, Clone)]
+pub struct Node {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub children: Vec<usize>,
+    pub transform: NodeTransform,
+    pub mesh: Option<usize>,
+    pub camera: Option<usize>,
+    pub light: Option<usize>,
+}
+
+/// A mesh placed in the world by a node (at the rest pose, without animation).
 #[derive(Debug, Clone)]
 pub struct Instance {
     pub name: String,
     pub mesh: usize,
+    /// The node that places it; `None` for instances made without a hierarchy.
+    pub node: Option<usize>,
     pub world_from_object: Mat4,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Scene {
     pub source: PathBuf,
     pub meshes: Vec<Mesh>,
     pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub images: Vec<TextureImage>,
+    pub nodes: Vec<Node>,
+    /// The nodes of the rendered glTF scene.
+    pub roots: Vec<usize>,
     pub instances: Vec<Instance>,
-    /// The glTF's first camera, if it has one.
+    /// Every camera placed in the scene, in traversal order; the first is the default.
+    pub cameras: Vec<Camera>,
+    /// The camera to render with, when the scene has one.
     pub camera: Option<Camera>,
+    pub lights: Vec<Light>,
+    pub animations: Vec<Animation>,
+    /// Things the loader skipped (unknown optional extensions, unsupported channels), for the user to read.
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -88,5 +137,40 @@ impl Scene {
     /// The scene's camera, or one that frames its bounds (looking down −Z from slightly above).
     pub fn camera_or_default(&self) -> Camera {
         self.camera.clone().unwrap_or_else(|| Camera::framing(self.bounds()))
+    }
+
+    /// World transforms of every node at time `t` in seconds, with every animation applied (`None`: rest pose).
+    pub fn node_world_transforms(&self, t: Option<f32>) -> Vec<Mat4> {
+        let mut locals: Vec<NodeTransform> = self.nodes.iter().map(|n| n.transform).collect();
+        if let Some(t) = t {
+            for animation in &self.animations {
+                animation.apply(t, &mut locals);
+            }
+        }
+        let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
+        let mut done = vec![false; self.nodes.len()];
+        // Parents before children: walk from each root (the hierarchy was checked acyclic on load).
+        let mut stack: Vec<(usize, Mat4)> = self
+            .nodes
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.parent.is_none())
+            .map(|(i, _)| (i, Mat4::IDENTITY))
+            .collect();
+        while let Some((i, parent)) = stack.pop() {
+            if done[i] {
+                continue;
+            }
+            done[i] = true;
+            world[i] = parent * locals[i].matrix();
+            stack.extend(self.nodes[i].children.iter().map(|&c| (c, world[i])));
+        }
+        world
+    }
+
+    /// Each instance's world transform at time `t` (animation applied), in `instances` order.
+    pub fn instance_transforms_at(&self, t: f32) -> Vec<Mat4> {
+        let world = self.node_world_transforms(Some(t));
+        self.instances.iter().map(|i| i.node.map(|n| world[n]).unwrap_or(i.world_from_object)).collect()
     }
 }

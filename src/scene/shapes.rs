@@ -16,7 +16,14 @@ pub fn plane(size: Vec2, uv_scale: Vec2, material: Option<usize>) -> Primitive {
         Vec2::new(uv_scale.x, uv_scale.y),
         Vec2::new(0.0, uv_scale.y),
     ];
-    Primitive { positions, normals: vec![Vec3::Y; 4], uvs, indices: vec![0, 1, 2, 0, 2, 3], material }
+    Primitive {
+        positions,
+        normals: vec![Vec3::Y; 4],
+        uvs,
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material,
+        ..Default::default()
+    }
 }
 
 /// An axis-aligned box centred at the origin with the given half extents; each face has its own vertices,

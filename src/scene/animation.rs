@@ -1,0 +1,185 @@
+//! glTF animations: translation, rotation and scale channels sampled at any time t with STEP, LINEAR (slerp for
+//! rotations) and CUBICSPLINE interpolation (glTF 2.0 §3.11 and Appendix C). This is what motion blur reads.
+use super::NodeTransform;
+use anyhow::{bail, Result};
+use glam::{Quat, Vec3, Vec4};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Property {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    CubicSpline,
+}
+
+/// One animated property of one node. `values` holds one entry per key (xyz in a Vec4 for translation and
+/// scale, xyzw for rotation); for CUBICSPLINE, three per key: in-tangent, value, out-tangent.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub property: Property,
+    pub interpolation: Interpolation,
+    pub times: Vec<f32>,
+    pub values: Vec<Vec4>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Animation {
+    pub name: String,
+    pub channels: Vec<Channel>,
+}
+
+impl Channel {
+    /// Checks the shape the sampler code relies on: increasing times, the right number of values.
+    pub fn new(
+        node: usize,
+        property: Property,
+        interpolation: Interpolation,
+        times: Vec<f32>,
+        values: Vec<Vec4>,
+    ) -> Result<Self> {
+        if times.is_empty() {
+            bail!("animation sampler has no keyframes");
+        }
+        if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] <= w[0]) {
+            bail!("animation sampler input times must be finite and strictly increasing");
+        }
+        let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        if values.len() != times.len() * per_key {
+            bail!(
+                "animation sampler has {} outputs for {} keys ({per_key} per key for {interpolation:?})",
+                values.len(),
+                times.len()
+            );
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            bail!("animation sampler output is not finite");
+        }
+        Ok(Self { node, property, interpolation, times, values })
+    }
+
+    fn value(&self, key: usize) -> Vec4 {
+        match self.interpolation {
+            Interpolation::CubicSpline => self.values[3 * key + 1],
+            _ => self.values[key],
+        }
+    }
+
+    /// The property's value at time `t`; before the first key the first value, after the last the last.
+    pub fn sample(&self, t: f32) -> Vec4 {
+        let times = &self.times;
+        let last = times.len() - 1;
+        if t <= times[0] || last == 0 {
+            return self.value(0);
+        }
+        if t >= times[last] {
+            return self.value(last);
+        }
+        // times[k] <= t < times[k + 1]
+        let k = times.partition_point(|&x| x <= t) - 1;
+        let dt = times[k + 1] - times[k];
+        let s = (t - times[k]) / dt;
+        let rotation = self.property == Property::Rotation;
+        match self.interpolation {
+            Interpolation::Step => self.value(k),
+            Interpolation::Linear => {
+                let (a, b) = (self.value(k), self.value(k + 1));
+                if rotation {
+                    Vec4::from(Quat::from_vec4(a).normalize().slerp(Quat::from_vec4(b).normalize(), s))
+                } else {
+                    a.lerp(b, s)
+                }
+            }
+            Interpolation::CubicSpline => {
+                // Hermite spline, glTF 2.0 Appendix C: tangents are scaled by the key interval.
+                let v0 = self.values[3 * k + 1];
+                let b0 = self.values[3 * k + 2]; // out-tangent of key k
+                let a1 = self.values[3 * (k + 1)]; // in-tangent of key k+1
+                let v1 = self.values[3 * (k + 1) + 1];
+                let (s2, s3) = (s * s, s * s * s);
+                let p = v0 * (2.0 * s3 - 3.0 * s2 + 1.0)
+                    + b0 * (dt * (s3 - 2.0 * s2 + s))
+                    + v1 * (-2.0 * s3 + 3.0 * s2)
+                    + a1 * (dt * (s3 - s2));
+                if rotation {
+                    p.normalize_or_zero()
+                } else {
+                    p
+                }
+            }
+        }
+    }
+}
+
+impl Animation {
+    /// The time span its keys cover.
+    pub fn time_range(&self) -> (f32, f32) {
+        self.channels.iter().fold((f32::MAX, f32::MIN), |(lo, hi), c| {
+            (lo.min(c.times[0]), hi.max(*c.times.last().unwrap_or(&c.times[0])))
+        })
+    }
+
+    /// Overwrites the animated properties of `locals` with their values at `t`.
+    pub fn apply(&self, t: f32, locals: &mut [NodeTransform]) {
+        for channel in &self.channels {
+            let Some(local) = locals.get_mut(channel.node) else { continue };
+            let NodeTransform::Trs { translation, rotation, scale } = local else { continue };
+            let v = channel.sample(t);
+            match channel.property {
+                Property::Translation => *translation = v.truncate(),
+                Property::Rotation => *rotation = Quat::from_vec4(v).normalize(),
+                Property::Scale => *scale = v.truncate(),
+            }
+        }
+    }
+}
+
+/// A `Vec4` from xyz (w = 0), for translation and scale keys.
+pub fn vec4_from_xyz(v: [f32; 3]) -> Vec4 {
+    Vec3::from_array(v).extend(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn channel(interpolation: Interpolation, times: &[f32], values: &[Vec4]) -> Channel {
+        Channel::new(0, Property::Translation, interpolation, times.to_vec(), values.to_vec()).unwrap()
+    }
+
+    #[test]
+    fn step_holds_until_the_next_key() {
+        let c = channel(Interpolation::Step, &[0.0, 1.0], &[Vec4::ZERO, Vec4::ONE]);
+        assert_eq!(c.sample(0.999), Vec4::ZERO);
+        assert_eq!(c.sample(1.0), Vec4::ONE);
+        assert_eq!(c.sample(-5.0), Vec4::ZERO);
+        assert_eq!(c.sample(5.0), Vec4::ONE);
+    }
+
+    #[test]
+    fn cubic_spline_with_zero_tangents_is_smoothstep() {
+        let z = Vec4::ZERO;
+        let c = channel(Interpolation::CubicSpline, &[0.0, 2.0], &[z, z, z, z, Vec4::ONE, z]);
+        // p(s) = 3s² − 2s³ at s = 0.25: 0.15625.
+        assert!((c.sample(0.5).x - 0.15625).abs() < 1e-6);
+        // Tangents scale with the interval: out-tangent 1 per second over 2 s.
+        let d = channel(Interpolation::CubicSpline, &[0.0, 2.0], &[z, z, Vec4::ONE, z, z, z]);
+        // p(s) = dt (s³ − 2s² + s) = 2 (0.015625 − 0.125 + 0.25) at s = 0.25.
+        assert!((d.sample(0.5).x - 0.28125).abs() < 1e-6);
+    }
+
+    #[test]
+    fn bad_keyframes_are_rejected() {
+        assert!(Channel::new(0, Property::Scale, Interpolation::Linear, vec![1.0, 1.0], vec![Vec4::ONE; 2]).is_err());
+        assert!(
+            Channel::new(0, Property::Scale, Interpolation::CubicSpline, vec![0.0, 1.0], vec![Vec4::ONE; 2]).is_err()
+        );
+        assert!(Channel::new(0, Property::Scale, Interpolation::Linear, vec![], vec![]).is_err());
+    }
+}

@@ -1,0 +1,120 @@
+//! Bounds checks for glTF accessors, done before any data is read: the gltf crate's readers silently truncate
+//! (or panic) when a buffer is shorter than its accessors claim, and strata must instead say which accessor
+//! overruns which buffer.
+use anyhow::{bail, Context as _, Result};
+
+fn view_range(view: &gltf::buffer::View<'_>, buffers: &[Vec<u8>]) -> Result<(usize, usize)> {
+    let buffer =
+        buffers.get(view.buffer().index()).with_context(|| format!("bufferView {}: no such buffer", view.index()))?;
+    let end = view.offset().checked_add(view.length()).context("bufferView range overflows")?;
+    if end > buffer.len() {
+        bail!(
+            "bufferView {} (bytes {}..{end}) overruns buffer {} ({} bytes)",
+            view.index(),
+            view.offset(),
+            view.buffer().index(),
+            buffer.len()
+        );
+    }
+    Ok((view.offset(), end))
+}
+
+/// Checks that `count` elements of `element_size` bytes at `offset` with `stride` fit in `view`.
+fn check_elements(
+    what: &str,
+    view: &gltf::buffer::View<'_>,
+    buffers: &[Vec<u8>],
+    offset: usize,
+    count: usize,
+    element_size: usize,
+    stride: usize,
+) -> Result<()> {
+    let (start, end) = view_range(view, buffers)?;
+    if count == 0 {
+        return Ok(());
+    }
+    let needed = (count - 1)
+        .checked_mul(stride)
+        .and_then(|n| n.checked_add(element_size))
+        .and_then(|n| n.checked_add(offset))
+        .context("accessor size overflows")?;
+    if needed > end - start {
+        bail!(
+            "{what}: {count} elements of {element_size} bytes (stride {stride}) at offset {offset} need {needed} bytes, \
+             but bufferView {} holds {}",
+            view.index(),
+            end - start
+        );
+    }
+    Ok(())
+}
+
+/// Fails unless every byte `accessor` reads lies inside its buffer view and buffer, and its sparse indices are
+/// strictly increasing and below `count` (glTF 2.0 §3.6.2.3).
+pub fn check_accessor(accessor: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Result<()> {
+    let what =
+        format!("accessor {}{}", accessor.index(), accessor.name().map(|n| format!(" \"{n}\"")).unwrap_or_default());
+    let element_size = accessor.size();
+    if let Some(view) = accessor.view() {
+        let stride = view.stride().unwrap_or(element_size);
+        if stride < element_size {
+            bail!("{what}: byteStride {stride} is smaller than its element ({element_size} bytes)");
+        }
+        check_elements(&what, &view, buffers, accessor.offset(), accessor.count(), element_size, stride)?;
+    }
+    if let Some(sparse) = accessor.sparse() {
+        let count = sparse.count();
+        let indices = sparse.indices();
+        let index_size = match indices.index_type() {
+            gltf::accessor::sparse::IndexType::U8 => 1,
+            gltf::accessor::sparse::IndexType::U16 => 2,
+            gltf::accessor::sparse::IndexType::U32 => 4,
+        };
+        let index_view = indices.view();
+        check_elements(
+            &format!("{what} sparse indices"),
+            &index_view,
+            buffers,
+            indices.offset(),
+            count,
+            index_size,
+            index_size,
+        )?;
+        let values = sparse.values();
+        check_elements(
+            &format!("{what} sparse values"),
+            &values.view(),
+            buffers,
+            values.offset(),
+            count,
+            element_size,
+            element_size,
+        )?;
+        // Now safe to read the indices.
+        let (start, _) = view_range(&index_view, buffers)?;
+        let data = &buffers[index_view.buffer().index()][start + indices.offset()..];
+        let mut previous: Option<u32> = None;
+        for i in 0..count {
+            let at = i * index_size;
+            let index = match index_size {
+                1 => u32::from(data[at]),
+                2 => u32::from(u16::from_le_bytes([data[at], data[at + 1]])),
+                _ => u32::from_le_bytes([data[at], data[at + 1], data[at + 2], data[at + 3]]),
+            };
+            if index as usize >= accessor.count() || previous.is_some_and(|p| index <= p) {
+                bail!("{what}: sparse index {index} at position {i} is out of order or ≥ count {}", accessor.count());
+            }
+            previous = Some(index);
+        }
+    }
+    Ok(())
+}
+
+/// Collects a reader's values after the accessor was checked; a length mismatch is an error, not a truncation.
+pub fn collect_exact<T>(what: &str, accessor: &gltf::Accessor<'_>, values: impl Iterator<Item = T>) -> Result<Vec<T>> {
+    let values: Vec<T> = values.collect();
+    if values.len() != accessor.count() {
+        bail!("{what}: read {} values, accessor {} declares {}", values.len(), accessor.index(), accessor.count());
+    }
+    Ok(values)
+}

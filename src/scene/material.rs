@@ -1,0 +1,216 @@
+//! Materials (glTF metallic-roughness PBR with the extensions strata implements), textures and samplers.
+use glam::{Mat3, Vec2, Vec3, Vec4};
+
+/// `KHR_texture_transform`: uv' = T · R · S · uv (the extension's order: scale, then rotate, then offset).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UvTransform {
+    pub offset: Vec2,
+    /// Radians, counter-clockwise in UV space.
+    pub rotation: f32,
+    pub scale: Vec2,
+}
+
+impl UvTransform {
+    /// The 3×3 matrix the extension's README gives: translation · rotation · scale.
+    pub fn matrix(&self) -> Mat3 {
+        let (s, c) = self.rotation.sin_cos();
+        let translation = Mat3::from_cols(Vec3::X, Vec3::Y, self.offset.extend(1.0));
+        // The extension rotates with this matrix (note the signs: UV space has v pointing down the image).
+        let rotation = Mat3::from_cols(Vec3::new(c, -s, 0.0), Vec3::new(s, c, 0.0), Vec3::Z);
+        let scale = Mat3::from_diagonal(self.scale.extend(1.0));
+        translation * rotation * scale
+    }
+
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        (self.matrix() * uv.extend(1.0)).truncate()
+    }
+}
+
+/// A material's use of a texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TextureRef {
+    pub texture: usize,
+    /// Which TEXCOORD_n set (after `KHR_texture_transform`'s override).
+    pub tex_coord: u32,
+    pub transform: Option<UvTransform>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sampler {
+    pub mag_linear: bool,
+    pub min_linear: bool,
+    /// Minification uses mipmaps (any *_MIPMAP_* filter, or unspecified).
+    pub mipmaps: bool,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+}
+
+impl Default for Sampler {
+    /// glTF leaves filters to the implementation when unset; wrap defaults to REPEAT (§5.26).
+    fn default() -> Self {
+        Self { mag_linear: true, min_linear: true, mipmaps: true, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat }
+    }
+}
+
+/// A texture: an image with a sampler. Whether it is sRGB follows from how materials use it.
+#[derive(Debug, Clone)]
+pub struct Texture {
+    pub name: String,
+    pub image: usize,
+    pub sampler: Sampler,
+    /// Used as colour (base colour, emissive): its texels are sRGB-encoded (glTF 2.0 §3.9.2).
+    pub srgb: bool,
+}
+
+/// A decoded image, 8-bit RGBA, top row first (glTF UV (0,0) is the image's top-left, §3.8.4).
+#[derive(Clone)]
+pub struct TextureImage {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub rgba8: Vec<u8>,
+}
+
+impl std::fmt::Debug for TextureImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "TextureImage {{ name: {:?}, {}x{} }}", self.name, self.width, self.height)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    /// Discard where alpha < cutoff.
+    Mask {
+        cutoff: f32,
+    },
+    /// strata has no order-independent transparency: BLEND renders as coverage-weighted MASK at 0.5 in the
+    /// raster pass, and as translucency through `transmission` in the ray-traced one.
+    Blend,
+}
+
+/// How the scene file adds procedural bump mapping (Blinn 1978) with a Perlin height field.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BumpMap {
+    pub kind: NoiseKind,
+    /// Height amplitude in UV-space units of the surface.
+    pub amplitude: f32,
+    /// Noise frequency in cycles per UV unit.
+    pub frequency: f32,
+    pub octaves: u32,
+    pub lacunarity: f32,
+    pub gain: f32,
+    pub derivative: BumpDerivative,
+    /// Central-difference step ε in UV units (default 1/64).
+    pub epsilon: f32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoiseKind {
+    Noise,
+    Fbm,
+    Turbulence,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BumpDerivative {
+    CentralDifferences,
+    Analytic,
+}
+
+impl Default for BumpMap {
+    fn default() -> Self {
+        Self {
+            kind: NoiseKind::Fbm,
+            amplitude: 0.02,
+            frequency: 8.0,
+            octaves: 4,
+            lacunarity: 2.0,
+            gain: 0.5,
+            derivative: BumpDerivative::CentralDifferences,
+            epsilon: 1.0 / 64.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGBA base colour factor.
+    pub base_color: Vec4,
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Roughness in G, metalness in B (glTF 2.0 §3.9.2).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+    pub occlusion_texture: Option<TextureRef>,
+    pub occlusion_strength: f32,
+    /// Linear emitted radiance factor: `emissiveFactor` × `KHR_materials_emissive_strength`.
+    pub emissive: Vec3,
+    pub emissive_texture: Option<TextureRef>,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+    /// `KHR_materials_transmission` factor (0 = opaque).
+    pub transmission: f32,
+    pub transmission_texture: Option<TextureRef>,
+    /// `KHR_materials_ior` (default 1.5).
+    pub ior: f32,
+    /// Procedural bump mapping from the scene file.
+    pub bump: Option<BumpMap>,
+}
+
+impl Default for Material {
+    /// glTF's default material (§3.9.6): white, fully metallic and rough, single-sided, opaque.
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::ONE,
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            transmission: 0.0,
+            transmission_texture: None,
+            ior: 1.5,
+            bump: None,
+        }
+    }
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emissive.max_element() > 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn texture_transform_follows_the_extension_order() {
+        // Scale then rotate then offset: (1, 0) scaled ×2 → (2, 0); rotated 90° → (0, −2) in the extension's
+        // convention; offset (0.5, 0.5) → (0.5, −1.5).
+        let t =
+            UvTransform { offset: Vec2::splat(0.5), rotation: std::f32::consts::FRAC_PI_2, scale: Vec2::splat(2.0) };
+        let uv = t.apply(Vec2::new(1.0, 0.0));
+        assert!((uv - Vec2::new(0.5, -1.5)).length() < 1e-6, "{uv}");
+    }
+}
