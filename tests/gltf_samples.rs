@@ -24,7 +24,8 @@ fn load(name: &str) -> Option<Scene> {
 #[test]
 fn every_sample_loads_with_the_expected_counts() {
     // (file, triangles, animations, cameras, materials, textures, nodes, meshes, primitives) from the README.
-    let table: [(&str, usize, usize, usize, usize, usize, usize, usize, usize); 11] = [
+    type Row = (&'static str, usize, usize, usize, usize, usize, usize, usize, usize);
+    let table: [Row; 11] = [
         ("TriangleWithoutIndices.gltf", 1, 0, 0, 0, 0, 1, 1, 1),
         ("Triangle.gltf", 1, 0, 0, 0, 0, 1, 1, 1),
         ("SimpleMeshes.gltf", 2, 0, 0, 0, 0, 2, 1, 1),
