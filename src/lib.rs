@@ -9,14 +9,45 @@ pub mod vk;
 use anyhow::{bail, Result};
 use std::path::Path;
 
-/// Loads a scene from a `.gltf` / `.glb` file.
-pub fn load_scene(path: &Path) -> Result<scene::Scene> {
+/// A scene ready to render, with the settings its file asked for.
+#[derive(Debug)]
+pub struct LoadedScene {
+    pub scene: scene::Scene,
+    /// What a scene file's `[render]` table sets (empty for a bare glTF).
+    pub settings: scene::settings::SettingsOverrides,
+}
+
+/// How to load a scene.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LoadOptions {
+    /// Allow glTF URIs outside the file's directory (absolute paths, `..`); `None`: what the scene file says.
+    pub allow_any_uri: Option<bool>,
+}
+
+/// Loads a `.gltf` / `.glb` file, or a scene file (`.toml`) and the glTF it names.
+pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene> {
+    use scene::gltf_uri::UriPolicy;
+    let policy =
+        options.allow_any_uri.map(|any| if any { UriPolicy::AnyLocalPath } else { UriPolicy::InsideDirectory });
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
-        Some("gltf") | Some("glb") => scene::gltf_import::load_gltf(path, &Default::default()),
-        Some(other) => bail!("{}: unknown scene extension \".{other}\" (use .gltf or .glb)", path.display()),
-        None => bail!("{}: scene file has no extension (use .gltf or .glb)", path.display()),
+        Some("gltf") | Some("glb") => {
+            let options = scene::gltf_import::LoadOptions { uri_policy: policy.unwrap_or_default() };
+            let scene = scene::gltf_import::load_gltf(path, &options)?;
+            Ok(LoadedScene { scene, settings: Default::default() })
+        }
+        Some("toml") => {
+            let file = scene::scene_file::load_scene_file(path, policy)?;
+            Ok(LoadedScene { scene: file.scene, settings: file.settings })
+        }
+        Some(other) => bail!("{}: unknown scene extension \".{other}\" (use .gltf, .glb or .toml)", path.display()),
+        None => bail!("{}: scene file has no extension (use .gltf, .glb or .toml)", path.display()),
     }
+}
+
+/// Loads a scene with default options and without its settings.
+pub fn load_scene(path: &Path) -> Result<scene::Scene> {
+    Ok(load(path, &LoadOptions::default())?.scene)
 }
 
 /// What `render_preview` needs besides the scene.

@@ -47,17 +47,22 @@ struct GpuArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    /// The scene: a glTF 2.0 file (.gltf or .glb).
+    /// The scene: a glTF 2.0 file (.gltf or .glb), or a scene file (.toml, see docs/scene-format.md) that names
+    /// one and adds camera, lights, materials, motion and render settings.
     scene: PathBuf,
-    /// Output file; .png or .exr.
+    /// Output file, .png or .exr [default: the scene file's render.output].
     #[arg(short, long, value_name = "FILE")]
-    output: PathBuf,
-    /// Image size in pixels.
-    #[arg(long, value_name = "WxH", default_value = "960x540", value_parser = parse_size)]
-    size: (u32, u32),
-    /// Linear RGB background colour of pixels no surface covers, as R,G,B.
-    #[arg(long, value_name = "R,G,B", default_value = "0.02,0.02,0.025", value_parser = parse_rgb)]
-    background: [f32; 3],
+    output: Option<PathBuf>,
+    /// Image size in pixels [default: the scene file's, else 960x540].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
+    /// 0.02,0.02,0.025].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    background: Option<[f32; 3]>,
+    /// Let the glTF read files outside its own directory (absolute paths, ".."). Network URIs are never fetched.
+    #[arg(long)]
+    allow_any_uri: bool,
     #[command(flatten)]
     gpu: GpuArgs,
 }
@@ -69,8 +74,7 @@ struct InfoArgs {
     validate: bool,
 }
 
-/// Largest side accepted on the command line before asking the device (which may allow less).
-const MAX_SIDE: u32 = 16384;
+use strata::scene::settings::MAX_IMAGE_SIDE as MAX_SIDE;
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("\"{text}\" is not WIDTHxHEIGHT, e.g. 960x540"))?;
@@ -116,10 +120,28 @@ fn main() -> ExitCode {
 }
 
 fn render(args: RenderArgs) -> Result<()> {
+    let options = strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true) };
+    let loaded = strata::load(&args.scene, &options)?;
+    for warning in &loaded.scene.warnings {
+        eprintln!("warning: {}: {warning}", args.scene.display());
+    }
+    let cli = strata::scene::settings::SettingsOverrides {
+        width: args.size.map(|s| s.0),
+        height: args.size.map(|s| s.1),
+        background: args.background.map(glam::Vec3::from_array),
+        output: args.output.clone(),
+        ..Default::default()
+    };
+    // Defaults, then the scene file, then the command line.
+    let settings = strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&cli);
+    let output = settings
+        .output
+        .clone()
+        .ok_or_else(|| anyhow!("no output file: pass -o FILE (or set output in the scene file's [render] table)"))?;
     // Check the output name before any work, so a typo costs nothing.
-    strata::output::OutputFormat::from_path(&args.output)?;
-    strata::output::check_output_directory(&args.output)?;
-    let scene = strata::load_scene(&args.scene)?;
+    strata::output::OutputFormat::from_path(&output)?;
+    strata::output::check_output_directory(&output)?;
+    let scene = loaded.scene;
     let started = std::time::Instant::now();
     let gpu = Gpu::new(&GpuOptions {
         validation: args.gpu.validate,
@@ -127,19 +149,22 @@ fn render(args: RenderArgs) -> Result<()> {
         device: args.gpu.device.clone(),
     })?;
     let log = gpu.validation_log();
-    let settings =
-        strata::render::PreviewSettings { width: args.size.0, height: args.size.1, background: args.background };
-    let frame = strata::render_preview(&gpu, &scene, &settings)?;
+    let preview = strata::render::PreviewSettings {
+        width: settings.width,
+        height: settings.height,
+        background: settings.background.to_array(),
+    };
+    let frame = strata::render_preview(&gpu, &scene, &preview)?;
     let device_name = gpu.device.report.name.clone();
     drop(gpu);
     if args.gpu.validate {
         // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
-    strata::output::write_frame(&args.output, &frame)?;
+    strata::output::write_frame(&output, &frame)?;
     eprintln!(
         "strata: wrote {} ({}x{}, {} triangles, {} instances) on {device_name} in {:.2} s",
-        args.output.display(),
+        output.display(),
         frame.width,
         frame.height,
         scene.triangle_count(),

@@ -10,11 +10,29 @@ pub enum Projection {
     Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
 }
 
+/// A thin lens (DESIGN.md, "Thin lens"): aperture radius A in metres and the distance f of the plane in focus.
+/// A = 0 is the pinhole camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lens {
+    pub aperture_radius: f32,
+    pub focus_distance: f32,
+}
+
+impl Lens {
+    pub const PINHOLE: Lens = Lens { aperture_radius: 0.0, focus_distance: 1.0 };
+
+    /// Diameter of the circle of confusion on the focus plane for a point at depth `d`: 2A·|d − f| / d.
+    pub fn circle_of_confusion(&self, depth: f32) -> f32 {
+        2.0 * self.aperture_radius * (depth - self.focus_distance).abs() / depth
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
     pub name: String,
     pub world_from_camera: Mat4,
     pub projection: Projection,
+    pub lens: Lens,
 }
 
 impl Camera {
@@ -36,6 +54,7 @@ impl Camera {
                 znear: (distance - radius).max(distance * 1e-3),
                 zfar: Some(distance + radius * 2.0),
             },
+            lens: Lens::PINHOLE,
         }
     }
 

@@ -482,6 +482,7 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene) -> Result<()> {
                 name: camera.name().map(str::to_owned).unwrap_or_else(|| name.clone()),
                 world_from_camera: Mat4::from_rotation_translation(rotation, translation),
                 projection,
+                lens: super::camera::Lens::PINHOLE,
             });
         }
         if let Some(light) = gltf_node.light() {

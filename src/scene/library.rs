@@ -60,6 +60,7 @@ impl Builder {
             name: "camera".into(),
             world_from_camera: look_at(eye, target, Vec3::Y),
             projection: Projection::Perspective { yfov: yfov_degrees.to_radians(), znear: 0.05, zfar: Some(100.0) },
+            lens: super::camera::Lens::PINHOLE,
         });
     }
 }

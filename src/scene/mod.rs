@@ -9,6 +9,9 @@ pub mod gltf_uri;
 pub mod library;
 pub mod light;
 pub mod material;
+pub mod motion;
+pub mod scene_file;
+pub mod settings;
 pub mod shapes;
 pub mod surface;
 
@@ -17,6 +20,7 @@ pub use camera::{Camera, Projection};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 pub use light::{Light, LightShape};
 pub use material::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+pub use motion::{NodeMotion, RigidMotion};
 use std::path::PathBuf;
 
 /// A triangle list with per-vertex attributes. Optional attributes are empty when absent, else the same length
@@ -109,6 +113,12 @@ pub struct Scene {
     pub camera: Option<Camera>,
     pub lights: Vec<Light>,
     pub animations: Vec<Animation>,
+    /// Extra motion of nodes over the shutter (scene file), on top of glTF animation.
+    pub node_motion: Vec<NodeMotion>,
+    /// Camera motion over the shutter (scene file).
+    pub camera_motion: RigidMotion,
+    /// Shutter open and close times in seconds (equal: no motion blur).
+    pub shutter: (f32, f32),
     /// Things the loader skipped (unknown optional extensions, unsupported channels), for the user to read.
     pub warnings: Vec<String>,
 }
@@ -146,6 +156,11 @@ impl Scene {
             for animation in &self.animations {
                 animation.apply(t, &mut locals);
             }
+            for m in &self.node_motion {
+                if let Some(local) = locals.get_mut(m.node) {
+                    *local = NodeTransform::Matrix(m.motion.apply(local.matrix(), t));
+                }
+            }
         }
         let mut world = vec![Mat4::IDENTITY; self.nodes.len()];
         let mut done = vec![false; self.nodes.len()];
@@ -166,6 +181,13 @@ impl Scene {
             stack.extend(self.nodes[i].children.iter().map(|&c| (c, world[i])));
         }
         world
+    }
+
+    /// The camera at time `t` (its scene-file motion applied).
+    pub fn camera_at(&self, t: f32) -> Camera {
+        let mut camera = self.camera_or_default();
+        camera.world_from_camera = self.camera_motion.apply(camera.world_from_camera, t);
+        camera
     }
 
     /// Each instance's world transform at time `t` (animation applied), in `instances` order.

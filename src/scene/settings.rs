@@ -1,0 +1,120 @@
+//! Render settings: what the scene file's `[render]` table and the command line set. Defaults live here, once.
+use anyhow::{bail, Result};
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// How sample points are placed (Cook, Porter and Carpenter 1984 and after).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Strata centres: aliases on regular patterns.
+    Regular,
+    /// Independent uniform points.
+    Random,
+    /// n×n strata, one random point in each (Cook's jitter).
+    Jittered,
+    /// Correlated multi-jittered sampling (Kensler 2013).
+    MultiJittered,
+    /// Owen-scrambled Sobol points.
+    Sobol,
+}
+
+impl SamplerKind {
+    pub const NAMES: [&'static str; 5] = ["regular", "random", "jittered", "multi-jittered", "sobol"];
+
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "regular" => Self::Regular,
+            "random" => Self::Random,
+            "jittered" => Self::Jittered,
+            "multi-jittered" => Self::MultiJittered,
+            "sobol" => Self::Sobol,
+            other => bail!("unknown sampler \"{other}\" (one of: {})", Self::NAMES.join(", ")),
+        })
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ToneMap {
+    /// Clamp to [0, 1].
+    Clamp,
+    /// A filmic curve (ACES fit, Narkowicz 2015).
+    Filmic,
+}
+
+impl ToneMap {
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "none" | "clamp" => Self::Clamp,
+            "filmic" => Self::Filmic,
+            other => bail!("unknown tone map \"{other}\" (one of: clamp, filmic)"),
+        })
+    }
+}
+
+/// Largest image side strata accepts before asking the device (which may allow less).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Largest samples-per-pixel count accepted: more is a typo, not a render.
+pub const MAX_SPP: u32 = 65536;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub sampler: SamplerKind,
+    pub seed: u64,
+    /// Linear RGB seen where rays escape.
+    pub background: Vec3,
+    /// Exposure in stops: radiance is scaled by 2^exposure before tone mapping.
+    pub exposure: f32,
+    pub tone_map: ToneMap,
+    /// Default output path (the command line's `-o` wins).
+    pub output: Option<PathBuf>,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            width: 960,
+            height: 540,
+            spp: 16,
+            sampler: SamplerKind::Jittered,
+            seed: 0,
+            background: Vec3::new(0.02, 0.02, 0.025),
+            exposure: 0.0,
+            tone_map: ToneMap::Filmic,
+            output: None,
+        }
+    }
+}
+
+/// Settings some source gives; unset fields leave the layer below alone.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SettingsOverrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub sampler: Option<SamplerKind>,
+    pub seed: Option<u64>,
+    pub background: Option<Vec3>,
+    pub exposure: Option<f32>,
+    pub tone_map: Option<ToneMap>,
+    pub output: Option<PathBuf>,
+}
+
+impl RenderSettings {
+    /// These settings with `overrides` applied on top.
+    pub fn with(mut self, overrides: &SettingsOverrides) -> Self {
+        let o = overrides.clone();
+        self.width = o.width.unwrap_or(self.width);
+        self.height = o.height.unwrap_or(self.height);
+        self.spp = o.spp.unwrap_or(self.spp);
+        self.sampler = o.sampler.unwrap_or(self.sampler);
+        self.seed = o.seed.unwrap_or(self.seed);
+        self.background = o.background.unwrap_or(self.background);
+        self.exposure = o.exposure.unwrap_or(self.exposure);
+        self.tone_map = o.tone_map.unwrap_or(self.tone_map);
+        self.output = o.output.or(self.output);
+        self
+    }
+}
