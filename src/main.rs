@@ -13,7 +13,7 @@ use strata::vk::{Gpu, GpuOptions};
     long_about = "strata renders glTF 2.0 scenes without a window through raw Vulkan and writes PNG or OpenEXR.\n\
                   It needs a Vulkan 1.3 device with VK_KHR_ray_query: on a machine without a GPU, run\n\
                   scripts/setup.sh to install Mesa's lavapipe. `strata info` shows what it finds.",
-    after_help = "Examples:\n  strata info\n  strata render scenes/showcase.gltf -o showcase.png\n  \
+    after_help = "Examples:\n  strata info\n  strata render scenes/showcase.toml -o showcase.png\n  \
                   strata render model.glb -o frame.exr --size 1920x1080 --validate"
 )]
 struct Cli {

@@ -64,14 +64,47 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
         }
         meshes.push(json!({"name": mesh.name, "primitives": primitives}));
     }
-    let materials: Vec<Value> = scene
-        .materials
-        .iter()
-        .map(|m| {
-            json!({"name": m.name, "pbrMetallicRoughness": {"baseColorFactor": m.base_color.to_array(),
-                "metallicFactor": 0.0, "roughnessFactor": 0.5}})
-        })
-        .collect();
+    let mut extensions_used: Vec<&str> = Vec::new();
+    let mut materials: Vec<Value> = Vec::new();
+    for m in &scene.materials {
+        if m.base_color_texture.is_some() || m.normal_texture.is_some() || m.emissive_texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let mut material = json!({"name": m.name, "pbrMetallicRoughness": {"baseColorFactor": m.base_color.to_array(),
+            "metallicFactor": m.metallic, "roughnessFactor": m.roughness}});
+        let mut extensions = serde_json::Map::new();
+        if m.is_emissive() {
+            // emissiveFactor is clamped to [0, 1]; the rest goes into KHR_materials_emissive_strength.
+            let strength = m.emissive.max_element().max(1.0);
+            material["emissiveFactor"] = json!((m.emissive / strength).to_array());
+            if strength > 1.0 {
+                extensions.insert("KHR_materials_emissive_strength".into(), json!({"emissiveStrength": strength}));
+            }
+        }
+        if m.transmission > 0.0 {
+            extensions.insert("KHR_materials_transmission".into(), json!({"transmissionFactor": m.transmission}));
+        }
+        if m.ior != 1.5 {
+            extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
+        }
+        if m.double_sided {
+            material["doubleSided"] = json!(true);
+        }
+        for name in extensions.keys() {
+            if !extensions_used.contains(&name.as_str()) {
+                extensions_used.push(match name.as_str() {
+                    "KHR_materials_emissive_strength" => "KHR_materials_emissive_strength",
+                    "KHR_materials_transmission" => "KHR_materials_transmission",
+                    _ => "KHR_materials_ior",
+                });
+            }
+        }
+        if !extensions.is_empty() {
+            material["extensions"] = Value::Object(extensions);
+        }
+        materials.push(material);
+    }
+    extensions_used.sort_unstable();
     let mut nodes: Vec<Value> = scene
         .instances
         .iter()
@@ -112,6 +145,9 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
     });
     if !cameras.is_empty() {
         root["cameras"] = json!(cameras);
+    }
+    if !extensions_used.is_empty() {
+        root["extensionsUsed"] = json!(extensions_used);
     }
     let mut text = serde_json::to_string_pretty(&root).context("serializing glTF JSON")?;
     text.push('\n');
