@@ -19,7 +19,10 @@ pub use animation::{Animation, Channel, Interpolation, Property};
 pub use camera::{Camera, Projection};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 pub use light::{Light, LightShape};
-pub use material::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+pub use material::{
+    AlphaMode, BumpDerivative, BumpMap, Material, NoiseKind, Sampler, Texture, TextureImage, TextureRef, UvTransform,
+    Wrap,
+};
 pub use motion::{NodeMotion, RigidMotion};
 use std::path::PathBuf;
 

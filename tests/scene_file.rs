@@ -1,0 +1,103 @@
+//! The scene file's meaning: each key of the committed scene files lands where the renderer reads it, and the
+//! settings layer defaults < scene file < command line.
+use glam::Vec3;
+use std::path::Path;
+use strata::scene::settings::{RenderSettings, SamplerKind, SettingsOverrides, ToneMap};
+use strata::scene::{LightShape, NoiseKind};
+
+fn load(name: &str) -> strata::LoadedScene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    strata::load(&path, &Default::default()).unwrap_or_else(|e| panic!("{name}: {e:#}"))
+}
+
+#[test]
+fn every_committed_scene_file_loads() {
+    for (name, _) in strata::scene::library::all() {
+        let loaded = load(&format!("{name}.toml"));
+        assert!(loaded.scene.triangle_count() > 0, "{name}");
+        assert!(loaded.scene.warnings.is_empty(), "{name}: {:?}", loaded.scene.warnings);
+    }
+}
+
+#[test]
+fn cornell_bumps_reach_their_materials() {
+    let s = load("cornell.toml").scene;
+    let bump = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().bump;
+    let white = bump("white wall").unwrap();
+    assert_eq!((white.kind, white.amplitude, white.frequency, white.octaves), (NoiseKind::Fbm, 0.004, 6.0, 4));
+    assert_eq!(white.epsilon, 1.0 / 64.0, "ε defaults to 1/64");
+    assert_eq!(bump("red wall").unwrap().kind, NoiseKind::Turbulence);
+    assert_eq!(bump("green wall").unwrap().derivative, strata::scene::material::BumpDerivative::Analytic);
+    assert!(bump("ceiling light").is_none());
+    // The emissive ceiling square is the light: emissiveFactor × KHR_materials_emissive_strength survives.
+    let lamp = s.materials.iter().find(|m| m.name == "ceiling light").unwrap();
+    assert!((lamp.emissive - Vec3::new(17.0, 12.0, 4.0)).length() < 1e-4, "{}", lamp.emissive);
+}
+
+#[test]
+fn dof_lens_and_f_number_follow_the_thin_lens_model() {
+    let s = load("dof.toml").scene;
+    let lens = s.camera.as_ref().unwrap().lens;
+    assert_eq!((lens.aperture_radius, lens.focus_distance), (0.06, 6.0));
+    // Circle of confusion 2A·|d − f|/d: zero at the focus plane; 2·0.06·4/2 = 0.24 m for the sphere at 2 m.
+    assert_eq!(lens.circle_of_confusion(6.0), 0.0);
+    assert!((lens.circle_of_confusion(2.0) - 0.24).abs() < 1e-6);
+    // showcase.toml gives f/5.6 with a 40° field of view: focal length 12 mm / tan 20° = 32.97 mm,
+    // aperture radius = focal / (2N) = 2.943 mm; focus at the look_at point.
+    let show = load("showcase.toml").scene;
+    let lens = show.camera.as_ref().unwrap().lens;
+    let focal = 0.012 / 20f32.to_radians().tan();
+    assert!((lens.aperture_radius - focal / 11.2).abs() < 1e-6, "{}", lens.aperture_radius);
+    let eye = Vec3::new(0.0, 1.7, 5.5);
+    assert!((lens.focus_distance - (Vec3::new(0.2, 0.6, 0.0) - eye).length()).abs() < 1e-5);
+    assert_eq!(show.shutter, (0.0, 0.25));
+}
+
+#[test]
+fn motion_moves_nodes_over_the_shutter_on_top_of_their_placement() {
+    let s = load("motion.toml").scene;
+    assert_eq!(s.shutter, (0.0, 0.5));
+    let index = |name: &str| s.instances.iter().position(|i| i.name == name).unwrap();
+    let (slide, fall, still) = (index("sliding box"), index("falling sphere"), index("still box"));
+    let at_open = s.instance_transforms_at(0.0);
+    let at_close = s.instance_transforms_at(0.5);
+    let moved = |i: usize| at_close[i].w_axis.truncate() - at_open[i].w_axis.truncate();
+    assert!((moved(slide) - Vec3::new(1.0, 0.0, 0.0)).length() < 1e-6, "2 m/s for 0.5 s");
+    assert!((moved(fall) - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    assert_eq!(moved(still), Vec3::ZERO);
+    assert_eq!(at_open[slide], s.instances[slide].world_from_object, "t = 0 is the placement");
+    // The slab spins π rad/s about Z: a quarter turn by the shutter closing at 0.5 s, so +X turns to +Y.
+    let slab = index("spinning slab");
+    let x_axis = at_close[slab].x_axis.truncate().normalize();
+    assert!((x_axis - Vec3::Y).length() < 1e-4, "{x_axis}");
+}
+
+#[test]
+fn soft_shadow_lights_convert_power_to_radiance() {
+    let s = load("soft-shadows.toml").scene;
+    assert_eq!(s.lights.len(), 4);
+    let quad = &s.lights[0];
+    assert_eq!(quad.shape, LightShape::Quad { size: glam::Vec2::new(0.1, 0.1) });
+    // Φ = π L A for a one-sided Lambertian emitter: 60 W over 0.01 m² is L = 60 / (0.01 π).
+    let expected = 60.0 / (0.01 * std::f32::consts::PI);
+    assert!((quad.emission.x / expected - 1.0).abs() < 1e-5, "{} vs {expected}", quad.emission.x);
+    // It faces down (−Z of its frame along −Y) and sits where the file says.
+    let frame = quad.world_from_light;
+    assert!((frame.transform_vector3(Vec3::NEG_Z) - Vec3::NEG_Y).length() < 1e-6);
+    assert!((frame.w_axis.truncate() - Vec3::new(-2.5, 3.0, 0.0)).length() < 1e-6);
+    let point = &s.lights[3];
+    assert_eq!(point.shape, LightShape::Point { radius: 0.0 });
+    assert_eq!(point.emission, Vec3::splat(2.0));
+}
+
+#[test]
+fn settings_layer_defaults_then_file_then_command_line() {
+    let loaded = load("showcase.toml");
+    let file = RenderSettings::default().with(&loaded.settings);
+    assert_eq!((file.width, file.height, file.spp), (960, 540, 64));
+    assert_eq!((file.sampler, file.tone_map), (SamplerKind::MultiJittered, ToneMap::Filmic));
+    let cli = SettingsOverrides { spp: Some(4), width: Some(100), ..Default::default() };
+    let both = file.clone().with(&cli);
+    assert_eq!((both.width, both.height, both.spp), (100, 540, 4));
+    assert_eq!(RenderSettings::default().with(&SettingsOverrides::default()), RenderSettings::default());
+}
