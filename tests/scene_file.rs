@@ -101,3 +101,24 @@ fn settings_layer_defaults_then_file_then_command_line() {
     assert_eq!((both.width, both.height, both.spp), (100, 540, 4));
     assert_eq!(RenderSettings::default().with(&SettingsOverrides::default()), RenderSettings::default());
 }
+
+#[test]
+fn every_example_in_the_format_document_loads() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(root.join("docs/scene-format.md")).unwrap();
+    let blocks: Vec<&str> = doc.split("```toml\n").skip(1).map(|b| b.split("```").next().unwrap()).collect();
+    assert!(blocks.len() >= 8, "found {} toml examples", blocks.len());
+    let dir = std::env::temp_dir().join(format!("strata-doc-examples-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (i, block) in blocks.iter().enumerate() {
+        // Examples name materials of the cornell scene or nodes of the showcase; point them at the right glTF.
+        let scene = if block.contains("white wall") { "cornell" } else { "showcase" };
+        let gltf = root.join(format!("scenes/{scene}.gltf"));
+        let body: String = block.lines().filter(|l| !l.starts_with("gltf =")).collect::<Vec<_>>().join("\n");
+        let text = format!("gltf = {:?}\n{body}\n", gltf.to_str().unwrap());
+        let path = dir.join(format!("example-{i}.toml"));
+        std::fs::write(&path, text).unwrap();
+        strata::load(&path, &Default::default())
+            .unwrap_or_else(|e| panic!("example {i} does not load: {e:#}\n{block}"));
+    }
+}
