@@ -64,6 +64,7 @@ pub fn render_preview(
     settings: &render::PreviewSettings,
 ) -> Result<output::Frame> {
     let gpu_scene = render::GpuScene::upload(&gpu.device, scene)?;
-    let pass = render::PreviewPass::new(&gpu.device)?;
-    pass.render(scene, &gpu_scene, settings)
+    let textures = render::textures::GpuTextures::upload(&gpu.device, scene)?;
+    let pass = render::PreviewPass::new(&gpu.device, textures.images.len() as u32)?;
+    pass.render(scene, &gpu_scene, &textures, settings)
 }

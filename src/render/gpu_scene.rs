@@ -9,6 +9,10 @@ use std::sync::Arc;
 pub struct GpuPrimitive {
     pub positions: Buffer,
     pub normals: Buffer,
+    /// TEXCOORD_0, zeros when the mesh has none.
+    pub uvs: Buffer,
+    /// COLOR_0 as linear RGBA, white when the mesh has none.
+    pub colors: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
     pub vertex_count: u32,
@@ -49,6 +53,23 @@ impl GpuScene {
                     vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
                     16,
                 )?;
+                let uv_data = if p.uvs.is_empty() { vec![glam::Vec2::ZERO; p.positions.len()] } else { p.uvs.clone() };
+                let uvs = Buffer::device_local_with_data(
+                    device,
+                    &format!("{name} uvs"),
+                    &uv_data,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                    16,
+                )?;
+                let color_data =
+                    if p.colors.is_empty() { vec![glam::Vec4::ONE; p.positions.len()] } else { p.colors.clone() };
+                let colors = Buffer::device_local_with_data(
+                    device,
+                    &format!("{name} colors"),
+                    &color_data,
+                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                    16,
+                )?;
                 let indices = Buffer::device_local_with_data(
                     device,
                     &format!("{name} indices"),
@@ -59,6 +80,8 @@ impl GpuScene {
                 primitives.push(GpuPrimitive {
                     positions,
                     normals,
+                    uvs,
+                    colors,
                     indices,
                     index_count: p.indices.len() as u32,
                     vertex_count: p.positions.len() as u32,

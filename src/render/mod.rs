@@ -3,6 +3,7 @@ pub mod gpu_scene;
 pub mod preview;
 pub mod ray_probe;
 pub mod solid;
+pub mod textures;
 
 pub use gpu_scene::GpuScene;
 pub use preview::{PreviewPass, PreviewSettings};

@@ -1,13 +1,14 @@
 //! The first-frame preview pass: rasterizes every placed mesh with simple view-space shading into a linear
 //! RGBA32F image (dynamic rendering, depth tested). The full G-buffer and accumulation passes replace it.
 use super::gpu_scene::GpuScene;
+use super::textures::GpuTextures;
 use crate::output::Frame;
 use crate::scene::Scene;
 use crate::shaders;
 use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
-use crate::vk::pipeline::{GraphicsDesc, Pipeline};
+use crate::vk::pipeline::{Binding, GraphicsDesc, Pipeline};
 use crate::vk::readback::read_image;
-use crate::vk::{Device, Image};
+use crate::vk::{Buffer, Device, Image};
 use anyhow::{bail, Result};
 use ash::vk;
 use glam::{Mat3, Mat4, Vec4};
@@ -27,13 +28,16 @@ pub fn preview_shade(base_color: glam::Vec3, view_normal: glam::Vec3) -> glam::V
 pub const COLOR_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
-/// Push constants; mirrors `shaders/include/preview_layout.glsl`.
+/// Per-draw data; mirrors `PreviewDraw` in `shaders/include/preview_layout.glsl` (std430).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct PreviewPush {
+pub struct PreviewDraw {
     pub clip_from_object: Mat4,
     pub view_normal_rows: [Vec4; 3],
     pub base_color: Vec4,
+    pub uv_transform_rows: [Vec4; 2],
+    pub base_color_texture: i32,
+    pub pad: [i32; 3],
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -50,14 +54,26 @@ pub struct PreviewPass {
 }
 
 impl PreviewPass {
-    pub fn new(device: &Arc<Device>) -> Result<Self> {
+    /// A preview pipeline for a scene with `texture_count` textures (at least one: see `GpuTextures`).
+    pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
         let vertex_bindings = [
             vk::VertexInputBindingDescription::default().binding(0).stride(12),
             vk::VertexInputBindingDescription::default().binding(1).stride(12),
+            vk::VertexInputBindingDescription::default().binding(2).stride(8),
+            vk::VertexInputBindingDescription::default().binding(3).stride(16),
         ];
         let vertex_attributes = [
             vk::VertexInputAttributeDescription::default().location(0).binding(0).format(vk::Format::R32G32B32_SFLOAT),
             vk::VertexInputAttributeDescription::default().location(1).binding(1).format(vk::Format::R32G32B32_SFLOAT),
+            vk::VertexInputAttributeDescription::default().location(2).binding(2).format(vk::Format::R32G32_SFLOAT),
+            vk::VertexInputAttributeDescription::default()
+                .location(3)
+                .binding(3)
+                .format(vk::Format::R32G32B32A32_SFLOAT),
+        ];
+        let bindings = [
+            Binding::new(0, vk::DescriptorType::STORAGE_BUFFER),
+            Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
         ];
         let pipeline = Pipeline::graphics(
             device,
@@ -65,8 +81,8 @@ impl PreviewPass {
                 name: "preview pipeline",
                 vertex: ("preview.vert", shaders::PREVIEW_VERT),
                 fragment: ("preview.frag", shaders::PREVIEW_FRAG),
-                bindings: &[],
-                push_constant_size: std::mem::size_of::<PreviewPush>() as u32,
+                bindings: &bindings,
+                push_constant_size: 0,
                 vertex_bindings: &vertex_bindings,
                 vertex_attributes: &vertex_attributes,
                 color_formats: &[COLOR_FORMAT],
@@ -79,7 +95,13 @@ impl PreviewPass {
     }
 
     /// Renders the scene from its camera (or a framing default) and reads the picture back.
-    pub fn render(&self, scene: &Scene, gpu_scene: &GpuScene, settings: &PreviewSettings) -> Result<Frame> {
+    pub fn render(
+        &self,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        textures: &GpuTextures,
+        settings: &PreviewSettings,
+    ) -> Result<Frame> {
         let device = &self.device;
         let (width, height) = (settings.width, settings.height);
         if width == 0 || height == 0 {
@@ -103,6 +125,32 @@ impl PreviewPass {
         let camera = scene.camera_or_default();
         let view_from_world = camera.view_from_world();
         let clip_from_world = camera.clip_from_view(width as f32 / height as f32) * view_from_world;
+
+        // One record per (instance, primitive), in draw order.
+        let mut draws = Vec::new();
+        for instance in &scene.instances {
+            let view_normal = Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
+            for primitive in &gpu_scene.meshes[instance.mesh].primitives {
+                let material = primitive.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
+                let texture = material.base_color_texture.filter(|t| t.texture < textures.images.len());
+                let uv = texture.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
+                draws.push(PreviewDraw {
+                    clip_from_object: clip_from_world * instance.world_from_object,
+                    view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
+                    base_color: material.base_color,
+                    uv_transform_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
+                    base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(-1),
+                    pad: [0; 3],
+                });
+            }
+        }
+        if draws.is_empty() {
+            // An empty scene still binds a valid buffer.
+            draws.push(bytemuck::Zeroable::zeroed());
+        }
+        let draw_buffer = Buffer::with_data(device, "preview draws", &draws, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let set = self.pipeline.new_descriptor_set("preview set")?;
+        set.storage_buffer(0, &draw_buffer).combined_image_samplers(1, &textures.bindings());
 
         submit_and_wait(device, "preview frame", |cmd| {
             image_barrier(
@@ -146,36 +194,20 @@ impl PreviewPass {
                         vk::Viewport::default().width(width as f32).height(height as f32).min_depth(0.0).max_depth(1.0);
                     device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
                     device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
-                    device.raw.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
                 }
-                for instance in &scene.instances {
-                    let view_normal =
-                        Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
-                    for primitive in &gpu_scene.meshes[instance.mesh].primitives {
-                        let material =
-                            primitive.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
-                        let push = PreviewPush {
-                            clip_from_object: clip_from_world * instance.world_from_object,
-                            view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
-                            base_color: material.base_color,
-                        };
-                        unsafe {
-                            device.raw.cmd_push_constants(
-                                cmd,
-                                self.pipeline.layout,
-                                vk::ShaderStageFlags::ALL,
-                                0,
-                                bytemuck::bytes_of(&push),
-                            );
-                            device.raw.cmd_bind_vertex_buffers(
-                                cmd,
-                                0,
-                                &[primitive.positions.raw, primitive.normals.raw],
-                                &[0, 0],
-                            );
-                            device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
-                            device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, 0);
-                        }
+                self.pipeline.bind(cmd, Some(&set), &[]);
+                let primitives = scene.instances.iter().flat_map(|i| gpu_scene.meshes[i.mesh].primitives.iter());
+                for (draw_index, primitive) in primitives.enumerate() {
+                    unsafe {
+                        device.raw.cmd_bind_vertex_buffers(
+                            cmd,
+                            0,
+                            &[primitive.positions.raw, primitive.normals.raw, primitive.uvs.raw, primitive.colors.raw],
+                            &[0, 0, 0, 0],
+                        );
+                        device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
+                        // firstInstance selects the draw record (gl_InstanceIndex in preview.vert).
+                        device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, draw_index as u32);
                     }
                 }
                 unsafe { device.raw.cmd_end_rendering(cmd) };
@@ -193,10 +225,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn push_constants_match_the_glsl_layout() {
-        // std430: mat4 at 0, vec4[3] at 64, vec4 at 112; 128 bytes is also the guaranteed push-constant minimum.
-        assert_eq!(std::mem::size_of::<PreviewPush>(), 128);
-        assert_eq!(std::mem::offset_of!(PreviewPush, view_normal_rows), 64);
-        assert_eq!(std::mem::offset_of!(PreviewPush, base_color), 112);
+    fn draw_record_matches_the_glsl_layout() {
+        // std430: mat4 at 0, vec4[3] at 64, vec4 at 112, vec4[2] at 128, int at 160, padded to 176.
+        assert_eq!(std::mem::size_of::<PreviewDraw>(), 176);
+        assert_eq!(std::mem::offset_of!(PreviewDraw, view_normal_rows), 64);
+        assert_eq!(std::mem::offset_of!(PreviewDraw, base_color), 112);
+        assert_eq!(std::mem::offset_of!(PreviewDraw, uv_transform_rows), 128);
+        assert_eq!(std::mem::offset_of!(PreviewDraw, base_color_texture), 160);
     }
 }

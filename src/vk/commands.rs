@@ -128,6 +128,14 @@ impl Access {
                 | vk::AccessFlags2::SHADER_READ.as_raw(),
         ),
     };
+    /// Sampled reads in fragment and compute shaders. (SHADER_READ rather than sync2's narrower
+    /// SHADER_SAMPLED_READ: best practices 1.3.239 expects it for SHADER_READ_ONLY_OPTIMAL.)
+    pub const SHADER_SAMPLED_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::from_raw(
+            vk::PipelineStageFlags2::FRAGMENT_SHADER.as_raw() | vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw(),
+        ),
+        access: vk::AccessFlags2::SHADER_READ,
+    };
     pub const COMPUTE_READ: Access =
         Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_STORAGE_READ };
     pub const COMPUTE_WRITE: Access =

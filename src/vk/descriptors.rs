@@ -76,6 +76,29 @@ impl DescriptorSet {
         self
     }
 
+    /// Points the array at `binding` at sampled images (in `SHADER_READ_ONLY_OPTIMAL`) with their samplers.
+    pub fn combined_image_samplers(&self, binding: u32, images: &[(vk::ImageView, vk::Sampler)]) -> &Self {
+        if images.is_empty() {
+            return self;
+        }
+        let infos: Vec<vk::DescriptorImageInfo> = images
+            .iter()
+            .map(|&(view, sampler)| {
+                vk::DescriptorImageInfo::default()
+                    .image_view(view)
+                    .sampler(sampler)
+                    .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+            })
+            .collect();
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.raw)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&infos);
+        unsafe { self.device.raw.update_descriptor_sets(&[write], &[]) };
+        self
+    }
+
     /// Points `binding` at a top-level acceleration structure.
     pub fn acceleration_structure(&self, binding: u32, tlas: vk::AccelerationStructureKHR) -> &Self {
         let structures = [tlas];

@@ -235,6 +235,62 @@ impl Image {
         Ok(image)
     }
 
+    /// A sampled 2D image filled with `texels` (tightly packed rows of `format`) through a staging copy, left in
+    /// `SHADER_READ_ONLY_OPTIMAL` for fragment and compute shaders.
+    pub fn sampled_with_data(
+        device: &Arc<Device>,
+        name: &str,
+        format: vk::Format,
+        extent: vk::Extent2D,
+        texels: &[u8],
+    ) -> Result<Self> {
+        let texel = texel_size(format).ok_or_else(|| anyhow!("image \"{name}\": cannot upload format {format:?}"))?;
+        let expected = texel * extent.width as usize * extent.height as usize;
+        if texels.len() != expected {
+            bail!("image \"{name}\": {} bytes given, {expected} needed", texels.len());
+        }
+        let image = Self::new_2d(
+            device,
+            name,
+            format,
+            extent,
+            vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+        )?;
+        let staging =
+            Buffer::with_data(device, &format!("{name} staging"), texels, vk::BufferUsageFlags::TRANSFER_SRC, 1)?;
+        super::commands::submit_and_wait(device, &format!("upload {name}"), |cmd| {
+            use super::commands::{image_barrier, Access};
+            image_barrier(
+                device,
+                cmd,
+                &image,
+                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE),
+            );
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(vk::ImageSubresourceLayers::default().aspect_mask(image.aspect).layer_count(1))
+                .image_extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 });
+            unsafe {
+                device.raw.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
+            image_barrier(
+                device,
+                cmd,
+                &image,
+                (vk::ImageLayout::TRANSFER_DST_OPTIMAL, Access::TRANSFER_WRITE),
+                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
+            );
+            Ok(())
+        })?;
+        Ok(image)
+    }
+
     pub fn subresource_range(&self) -> vk::ImageSubresourceRange {
         vk::ImageSubresourceRange::default().aspect_mask(self.aspect).level_count(1).layer_count(1)
     }

@@ -8,6 +8,7 @@ pub mod instance;
 pub mod memory;
 pub mod pipeline;
 pub mod readback;
+pub mod sampler;
 pub mod validation;
 
 pub use context::{Gpu, GpuOptions};
