@@ -118,3 +118,41 @@ pub fn collect_exact<T>(what: &str, accessor: &gltf::Accessor<'_>, values: impl 
     }
     Ok(values)
 }
+
+/// Fails unless `accessor` has one of the element shapes and component types glTF allows for its use
+/// (glTF 2.0 §3.7.2.1 for attributes, §3.7.2.2 for indices, §3.11 for animation samplers). The gltf crate's
+/// readers assume these and panic otherwise.
+pub fn check_format(
+    what: &str,
+    accessor: &gltf::Accessor<'_>,
+    dimensions: &[gltf::accessor::Dimensions],
+    types: &[(gltf::accessor::DataType, bool)],
+) -> Result<()> {
+    let (dims, ty, normalized) = (accessor.dimensions(), accessor.data_type(), accessor.normalized());
+    if !dimensions.contains(&dims) {
+        bail!("{what}: accessor {} is {dims:?}, glTF allows {dimensions:?} here", accessor.index());
+    }
+    // `normalized` only matters for integer types; floats must not claim it.
+    let ok = types.iter().any(|&(t, n)| t == ty && (t == gltf::accessor::DataType::F32 || n == normalized));
+    if !ok || (ty == gltf::accessor::DataType::F32 && normalized) {
+        let kind = if normalized { "normalized " } else { "" };
+        bail!("{what}: accessor {} holds {kind}{ty:?} components, which glTF does not allow here", accessor.index());
+    }
+    Ok(())
+}
+
+/// The formats glTF allows per attribute semantic; `None` for semantics strata does not read.
+pub fn attribute_formats(
+    semantic: &gltf::Semantic,
+) -> Option<(&'static [gltf::accessor::Dimensions], &'static [(gltf::accessor::DataType, bool)])> {
+    use gltf::accessor::{DataType::*, Dimensions::*};
+    const FLOAT: &[(gltf::accessor::DataType, bool)] = &[(F32, false)];
+    const UV: &[(gltf::accessor::DataType, bool)] = &[(F32, false), (U8, true), (U16, true)];
+    Some(match semantic {
+        gltf::Semantic::Positions | gltf::Semantic::Normals => (&[Vec3], FLOAT),
+        gltf::Semantic::Tangents => (&[Vec4], FLOAT),
+        gltf::Semantic::TexCoords(_) => (&[Vec2], UV),
+        gltf::Semantic::Colors(_) => (&[Vec3, Vec4], UV),
+        _ => return None,
+    })
+}

@@ -2,7 +2,7 @@
 //! strata uses, materials and textures, the node hierarchy, cameras, `KHR_lights_punctual` lights and
 //! animations. Every accessor is bounds-checked before it is read; every error names the file and the problem.
 use super::animation::{vec4_from_xyz, Channel, Interpolation, Property};
-use super::gltf_accessors::{check_accessor, collect_exact};
+use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact};
 use super::gltf_uri::{read_uri, UriPolicy};
 use super::material::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
 use super::surface::compute_surface_derivatives;
@@ -45,7 +45,7 @@ pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
 /// Loads glTF from memory; relative URIs resolve against `base_dir`. (The fuzz target's entry point.)
 pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Scene> {
     check_required_extensions(bytes)?;
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("not a valid glTF file: {e}"))?;
+    let gltf = parse_and_validate(bytes)?;
     let document = &gltf.document;
     let mut scene = Scene::default();
     for ext in document.extensions_used() {
@@ -95,6 +95,35 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
         .collect();
     scene.warnings.extend(unsupported_channels);
     Ok(scene)
+}
+
+/// Parses and validates with the gltf crate, guarding against its validation code panicking on malformed input.
+fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
+    let unvalidated =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| anyhow!("not a valid glTF file: {e}"))?;
+    // gltf-json 1.4.1 indexes a primitive's POSITION accessor before checking the index is in range
+    // (mesh.rs, primitive_validate_hook); found by the fuzz target. Check every attribute index first.
+    let root = unvalidated.document.as_json();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let targets =
+                primitive.targets.iter().flatten().flat_map(|t| [t.positions, t.normals, t.tangents]).flatten();
+            for index in primitive.attributes.values().copied().chain(primitive.indices).chain(targets) {
+                if index.value() >= root.accessors.len() {
+                    bail!(
+                        "not a valid glTF file: mesh {m} primitive {p} refers to accessor {} ({} accessors)",
+                        index.value(),
+                        root.accessors.len()
+                    );
+                }
+            }
+        }
+    }
+    // Any other panic in third-party validation becomes an error rather than taking the process down.
+    match std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes)) {
+        Ok(result) => result.map_err(|e| anyhow!("not a valid glTF file: {e}")),
+        Err(_) => bail!("not a valid glTF file: the gltf parser failed on it (malformed input)"),
+    }
 }
 
 /// Reads `extensionsRequired` from the raw JSON (of a `.gltf` or a `.glb`'s JSON chunk) before anything else,
@@ -302,9 +331,16 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>]) -> Res
         bail!("mode {:?} is not supported (only TRIANGLES)", primitive.mode());
     }
     for (semantic, accessor) in primitive.attributes() {
-        check_accessor(&accessor, buffers).with_context(|| format!("attribute {semantic:?}"))?;
+        let what = semantic.to_string();
+        if let Some((dimensions, types)) = attribute_formats(&semantic) {
+            check_format(&what, &accessor, dimensions, types)?;
+        }
+        check_accessor(&accessor, buffers).with_context(|| what.clone())?;
     }
     if let Some(indices) = primitive.indices() {
+        use gltf::accessor::{DataType, Dimensions};
+        let types = [(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
+        check_format("indices", &indices, &[Dimensions::Scalar], &types)?;
         check_accessor(&indices, buffers).context("indices")?;
     }
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
@@ -548,6 +584,15 @@ fn import_animation(animation: &gltf::Animation<'_>, buffers: &[Vec<u8>], scene:
             bail!("channel targets node {node}, which has a matrix; only TRS nodes can be animated (§3.11)");
         }
         let sampler = channel.sampler();
+        {
+            use gltf::accessor::{DataType::*, Dimensions::*};
+            check_format("sampler input", &sampler.input(), &[Scalar], &[(F32, false)])?;
+            let rotation_types = [(F32, false), (I8, true), (U8, true), (I16, true), (U16, true)];
+            match property {
+                Property::Rotation => check_format("sampler output", &sampler.output(), &[Vec4], &rotation_types)?,
+                _ => check_format("sampler output", &sampler.output(), &[Vec3], &[(F32, false)])?,
+            }
+        }
         check_accessor(&sampler.input(), buffers).context("sampler input")?;
         check_accessor(&sampler.output(), buffers).context("sampler output")?;
         let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));

@@ -172,10 +172,7 @@ pub fn load_scene_file(path: &Path, uri_policy: Option<UriPolicy>) -> Result<Sce
         Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
     };
     let source = Source { path, text: &text };
-    let root: FileRoot = toml::from_str(&text).map_err(|e| {
-        let span = e.span().unwrap_or(0..0);
-        source.error(span, e.message().trim_end())
-    })?;
+    let root = parse(&source)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let gltf_path = dir.join(root.gltf.get_ref());
     let policy =
@@ -191,6 +188,25 @@ pub fn load_scene_file(path: &Path, uri_policy: Option<UriPolicy>) -> Result<Sce
     };
     scene.source = path.to_path_buf();
     Ok(SceneFile { scene, settings, gltf_path })
+}
+
+fn parse(source: &Source<'_>) -> Result<FileRoot> {
+    toml::from_str(source.text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        source.error(span, e.message().trim_end())
+    })
+}
+
+/// Parses scene-file `text` (reported as `path`) and applies it to an already loaded `scene`, without loading
+/// the glTF its `gltf` key names. For tools and the fuzz target; [`load_scene_file`] is the normal entry.
+pub fn apply_scene_text(path: &Path, text: &str, scene: &mut Scene) -> Result<SettingsOverrides> {
+    let source = Source { path, text };
+    let root = parse(&source)?;
+    apply(&source, &root, scene)?;
+    match &root.render {
+        Some(r) => render_settings(&source, r, path.parent().unwrap_or(Path::new("."))),
+        None => Ok(SettingsOverrides::default()),
+    }
 }
 
 fn apply(source: &Source<'_>, root: &FileRoot, scene: &mut Scene) -> Result<()> {
