@@ -119,6 +119,9 @@ pub fn collect_exact<T>(what: &str, accessor: &gltf::Accessor<'_>, values: impl 
     Ok(values)
 }
 
+/// Component types glTF allows for a use: (type, normalized).
+pub type AllowedTypes = &'static [(gltf::accessor::DataType, bool)];
+
 /// Fails unless `accessor` has one of the element shapes and component types glTF allows for its use
 /// (glTF 2.0 §3.7.2.1 for attributes, §3.7.2.2 for indices, §3.11 for animation samplers). The gltf crate's
 /// readers assume these and panic otherwise.
@@ -142,12 +145,10 @@ pub fn check_format(
 }
 
 /// The formats glTF allows per attribute semantic; `None` for semantics strata does not read.
-pub fn attribute_formats(
-    semantic: &gltf::Semantic,
-) -> Option<(&'static [gltf::accessor::Dimensions], &'static [(gltf::accessor::DataType, bool)])> {
+pub fn attribute_formats(semantic: &gltf::Semantic) -> Option<(&'static [gltf::accessor::Dimensions], AllowedTypes)> {
     use gltf::accessor::{DataType::*, Dimensions::*};
-    const FLOAT: &[(gltf::accessor::DataType, bool)] = &[(F32, false)];
-    const UV: &[(gltf::accessor::DataType, bool)] = &[(F32, false), (U8, true), (U16, true)];
+    const FLOAT: AllowedTypes = &[(F32, false)];
+    const UV: AllowedTypes = &[(F32, false), (U8, true), (U16, true)];
     Some(match semantic {
         gltf::Semantic::Positions | gltf::Semantic::Normals => (&[Vec3], FLOAT),
         gltf::Semantic::Tangents => (&[Vec4], FLOAT),
