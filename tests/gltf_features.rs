@@ -1,0 +1,167 @@
+//! glTF features the shared samples do not exercise, on small files written here: a GLB with a binary chunk,
+//! sparse accessors, normalized integer attributes, the KHR extensions strata implements, alpha modes, and the
+//! warning for an optional extension it does not.
+use glam::{Vec2, Vec3, Vec4};
+use serde_json::{json, Value};
+use strata::scene::{AlphaMode, LightShape};
+
+fn bytes_f32(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// Binary data: 3 positions (36 B), 3 u8-normalized UVs padded (8 B), 3 u16-normalized RGBA colours (24 B),
+/// one sparse index (u8, padded to 4) and one sparse VEC3 value (12 B).
+fn buffer() -> Vec<u8> {
+    let mut b = bytes_f32(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    b.extend([0u8, 0, 255, 0, 0, 255, 0, 0]); // uv: (0,0) (1,0) (0,1), then padding
+    for c in [[65535u16, 0, 0, 65535], [0, 65535, 0, 65535], [0, 0, 32768, 65535]] {
+        b.extend(c.iter().flat_map(|v| v.to_le_bytes()));
+    }
+    b.extend([1u8, 0, 0, 0]); // sparse index 1
+    b.extend(bytes_f32(&[2.0, 0.0, 0.0])); // vertex 1 becomes (2, 0, 0)
+    b
+}
+
+fn document(buffer_entry: Value) -> Value {
+    json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_texture_transform", "KHR_lights_punctual", "KHR_materials_emissive_strength",
+                           "KHR_materials_transmission", "KHR_materials_ior", "EXT_made_up_extension"],
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"translation": [0, 3, 0],
+                   "extensions": {"KHR_lights_punctual": {"light": 0}}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [
+            {"type": "spot", "color": [1, 0.5, 0.25], "intensity": 4, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.5}}
+        ]}},
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "COLOR_0": 2}, "material": 0}]}],
+        "materials": [{
+            "name": "lit glass",
+            "alphaMode": "MASK", "alphaCutoff": 0.3, "doubleSided": true,
+            "emissiveFactor": [1, 0.5, 0],
+            "extensions": {
+                "KHR_materials_emissive_strength": {"emissiveStrength": 6},
+                "KHR_materials_transmission": {"transmissionFactor": 0.8},
+                "KHR_materials_ior": {"ior": 1.33}
+            },
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+                "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2], "rotation": 0}}}}
+        }],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9729}],
+        "images": [{"uri": png_data_uri()}],
+        "buffers": [buffer_entry],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 8},
+            {"buffer": 0, "byteOffset": 44, "byteLength": 24},
+            {"buffer": 0, "byteOffset": 68, "byteLength": 4},
+            {"buffer": 0, "byteOffset": 72, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [2, 1, 0],
+             "sparse": {"count": 1, "indices": {"bufferView": 3, "componentType": 5121},
+                        "values": {"bufferView": 4}}},
+            {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "normalized": true, "count": 3, "type": "VEC4"}
+        ]
+    })
+}
+
+fn png_data_uri() -> String {
+    use base64::Engine as _;
+    let mut png = Vec::new();
+    let pixels = [255u8, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255];
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &pixels,
+        2,
+        2,
+        image::ExtendedColorType::Rgba8,
+    )
+    .unwrap();
+    format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(png))
+}
+
+fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = serde_json::to_vec(json).unwrap();
+    while text.len() % 4 != 0 {
+        text.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let mut out = Vec::new();
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+fn check(scene: &strata::scene::Scene) {
+    let p = &scene.meshes[0].primitives[0];
+    // Sparse: vertex 1 moved from (1, 0, 0) to (2, 0, 0); the others keep their base values.
+    assert_eq!(p.positions, vec![Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0), Vec3::Y]);
+    // Normalized integers become [0, 1] floats.
+    assert_eq!(p.uvs, vec![Vec2::ZERO, Vec2::X, Vec2::Y]);
+    assert_eq!(p.colors[0], Vec4::new(1.0, 0.0, 0.0, 1.0));
+    assert!((p.colors[2].z - 32768.0 / 65535.0).abs() < 1e-6);
+    // Q_u, Q_v of the sparse-modified triangle: P = (2u, v, 0).
+    assert!((p.dpdu[0] - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6 && (p.dpdv[0] - Vec3::Y).length() < 1e-6);
+
+    let m = &scene.materials[0];
+    assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
+    assert!(m.double_sided);
+    assert_eq!(m.emissive, Vec3::new(6.0, 3.0, 0.0), "emissiveFactor × emissiveStrength");
+    assert_eq!((m.transmission, m.ior), (0.8, 1.33));
+    let t = m.base_color_texture.unwrap().transform.unwrap();
+    assert_eq!(t.apply(Vec2::new(0.25, 0.25)), Vec2::new(1.0, 0.5), "scale 2 then offset (0.5, 0)");
+    let sampler = scene.textures[0].sampler;
+    assert_eq!(
+        (sampler.wrap_s, sampler.wrap_t),
+        (strata::scene::Wrap::ClampToEdge, strata::scene::Wrap::MirroredRepeat)
+    );
+    assert!(!sampler.mag_linear && sampler.min_linear && !sampler.mipmaps);
+    assert!(scene.textures[0].srgb);
+    assert_eq!((scene.images[0].width, scene.images[0].height), (2, 2));
+
+    assert_eq!(scene.lights.len(), 1);
+    let light = &scene.lights[0];
+    assert_eq!(light.shape, LightShape::Spot { inner_cone: 0.2, outer_cone: 0.5, radius: 0.0 });
+    assert_eq!(light.emission, Vec3::new(4.0, 2.0, 1.0));
+    assert_eq!(light.world_from_light.w_axis.truncate(), Vec3::new(0.0, 3.0, 0.0));
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert!(scene.warnings[0].contains("EXT_made_up_extension"));
+}
+
+fn temp_dir(tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("strata-features-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn glb_with_a_binary_chunk_and_every_feature() {
+    let bin = buffer();
+    let doc = document(json!({"byteLength": bin.len()}));
+    let path = temp_dir("glb").join("features.glb");
+    std::fs::write(&path, glb(&doc, &bin)).unwrap();
+    check(&strata::load_scene(&path).unwrap());
+}
+
+#[test]
+fn gltf_with_an_external_buffer_and_every_feature() {
+    let dir = temp_dir("external");
+    let bin = buffer();
+    std::fs::write(dir.join("data with space.bin"), &bin).unwrap();
+    let doc = document(json!({"byteLength": bin.len(), "uri": "data%20with%20space.bin"}));
+    let path = dir.join("features.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    check(&strata::load_scene(&path).unwrap());
+}
