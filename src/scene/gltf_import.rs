@@ -119,6 +119,19 @@ fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
             }
         }
     }
+    // gltf-json 1.4.1 validates an animation's samplers but not its channels' target nodes; gltf's
+    // Channel::target().node() then unwraps a missing node (also found by the fuzz target).
+    for (a, animation) in root.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            if channel.target.node.value() >= root.nodes.len() {
+                bail!(
+                    "not a valid glTF file: animation {a} channel {c} targets node {} ({} nodes)",
+                    channel.target.node.value(),
+                    root.nodes.len()
+                );
+            }
+        }
+    }
     // Any other panic in third-party validation becomes an error rather than taking the process down.
     match std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes)) {
         Ok(result) => result.map_err(|e| anyhow!("not a valid glTF file: {e}")),
