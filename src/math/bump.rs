@@ -44,7 +44,7 @@ pub fn perturb_normal(n: Vec3, dpdu: Vec3, dpdv: Vec3, height_gradient: Vec2) ->
     let n_hat = n.normalize_or_zero();
     let big_n = dpdu.cross(dpdv);
     let length = big_n.length();
-    if n_hat == Vec3::ZERO || !(length > 1e-12) || !height_gradient.is_finite() {
+    if n_hat == Vec3::ZERO || length.is_nan() || length <= 1e-12 || !height_gradient.is_finite() {
         return n_hat;
     }
     let sigma = if n_hat.dot(big_n) < 0.0 { -1.0 } else { 1.0 };
