@@ -1,4 +1,5 @@
 //! CPU twins of the shader math in `shaders/include/<same name>.glsl`: the same functions, tested equal to the
 //! GPU, and what tests and any CPU baking use.
 pub mod bump;
+pub mod lens;
 pub mod noise;
