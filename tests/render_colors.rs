@@ -4,62 +4,12 @@
 //! textured and vertex-coloured samples (a flipped V or a swapped colour space fails it).
 mod common;
 
+use common::raycast::{cast, pixel_ray};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};
 use std::path::Path;
 use strata::output::{linear_to_srgb, srgb_to_linear, Frame};
 use strata::render::preview::{preview_shade, PreviewSettings};
 use strata::scene::{Scene, Wrap};
-
-struct Hit {
-    t: f32,
-    uv: Vec2,
-    color: Vec4,
-    normal: Vec3,
-    material: Option<usize>,
-}
-
-/// Möller–Trumbore against every triangle; barycentric interpolation of the attributes.
-fn cast(scene: &Scene, origin: Vec3, direction: Vec3) -> Option<Hit> {
-    let mut best: Option<Hit> = None;
-    for instance in &scene.instances {
-        let m = instance.world_from_object;
-        let normal_matrix = Mat3::from_mat4(m).inverse().transpose();
-        for p in &scene.meshes[instance.mesh].primitives {
-            for tri in p.indices.chunks_exact(3) {
-                let [i0, i1, i2] = [tri[0] as usize, tri[1] as usize, tri[2] as usize];
-                let (a, b, c) = (
-                    m.transform_point3(p.positions[i0]),
-                    m.transform_point3(p.positions[i1]),
-                    m.transform_point3(p.positions[i2]),
-                );
-                let (e1, e2) = (b - a, c - a);
-                let pv = direction.cross(e2);
-                let det = e1.dot(pv);
-                if det.abs() < 1e-12 {
-                    continue;
-                }
-                let s = origin - a;
-                let u = s.dot(pv) / det;
-                let q = s.cross(e1);
-                let v = direction.dot(q) / det;
-                let t = e2.dot(q) / det;
-                if u < 0.0 || v < 0.0 || u + v > 1.0 || t <= 1e-4 || best.as_ref().is_some_and(|h| h.t <= t) {
-                    continue;
-                }
-                let w = 1.0 - u - v;
-                let lerp2 = |x: &[Vec2]| if x.is_empty() { Vec2::ZERO } else { x[i0] * w + x[i1] * u + x[i2] * v };
-                let color = if p.colors.is_empty() {
-                    Vec4::ONE
-                } else {
-                    p.colors[i0] * w + p.colors[i1] * u + p.colors[i2] * v
-                };
-                let n = p.normals[i0] * w + p.normals[i1] * u + p.normals[i2] * v;
-                best = Some(Hit { t, uv: lerp2(&p.uvs), color, normal: normal_matrix * n, material: p.material });
-            }
-        }
-    }
-    best
-}
 
 fn wrap(x: f32, mode: Wrap) -> f32 {
     match mode {
@@ -98,30 +48,29 @@ fn agreement(scene: &Scene, frame: &Frame, settings: &PreviewSettings) -> (f32, 
     let camera = scene.camera_or_default();
     let view_from_world = camera.view_from_world();
     let clip_from_world = camera.clip_from_view(frame.width as f32 / frame.height as f32) * view_from_world;
-    let world_from_clip = clip_from_world.inverse();
+    let transforms: Vec<_> = scene.instances.iter().map(|i| i.world_from_object).collect();
     let (mut agree, mut covered) = (0usize, 0usize);
     for y in (0..frame.height).step_by(3) {
         for x in (0..frame.width).step_by(3) {
-            let ndc =
-                Vec2::new((x as f32 + 0.5) / frame.width as f32, (y as f32 + 0.5) / frame.height as f32) * 2.0 - 1.0;
-            let near = world_from_clip.project_point3(ndc.extend(0.0));
-            let far = world_from_clip.project_point3(ndc.extend(0.5));
-            let expected = match cast(scene, near, (far - near).normalize()) {
+            let (origin, direction) = pixel_ray(clip_from_world, x, y, frame.width, frame.height);
+            let expected = match cast(scene, &transforms, origin, direction) {
                 None => Vec3::from_array(settings.background),
                 Some(hit) => {
                     covered += 1;
-                    let material = hit.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
-                    let mut base = material.base_color * hit.color;
+                    let p = hit.primitive;
+                    let material = p.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
+                    let color = if p.colors.is_empty() { Vec4::ONE } else { hit.lerp(&p.colors) };
+                    let mut base = material.base_color * color;
                     if let Some(t) = material.base_color_texture {
-                        let uv = t.transform.map(|tr| tr.apply(hit.uv)).unwrap_or(hit.uv);
+                        let uv = hit.lerp(&p.uvs);
+                        let uv = t.transform.map(|tr| tr.apply(uv)).unwrap_or(uv);
                         base *= sample(scene, t.texture, uv);
                     }
-                    let mut n = Mat3::from_mat4(view_from_world) * hit.normal;
-                    n = n.normalize_or_zero();
-                    // The shader flips back faces towards the viewer; a view-space normal facing away (n·v < 0,
-                    // with v towards the eye) is a back face.
-                    let to_eye =
-                        -(view_from_world.transform_point3(near + (far - near).normalize() * hit.t)).normalize();
+                    let normal_matrix = Mat3::from_mat4(hit.world_from_object).inverse().transpose();
+                    let mut n =
+                        (Mat3::from_mat4(view_from_world) * (normal_matrix * hit.lerp(&p.normals))).normalize_or_zero();
+                    // The shader flips back faces towards the viewer.
+                    let to_eye = -view_from_world.transform_point3(origin + direction * hit.t).normalize();
                     if n.dot(to_eye) < 0.0 {
                         n = -n;
                     }

@@ -14,6 +14,10 @@ fn field(bump: &BumpMap, uv: Vec2) -> Vec4 {
         NoiseKind::Noise => noise_with_gradient(p),
         NoiseKind::Fbm => fbm_with_gradient(p, bump.octaves, bump.lacunarity, bump.gain),
         NoiseKind::Turbulence => turbulence_with_gradient(p, bump.octaves, bump.lacunarity, bump.gain),
+        NoiseKind::Sine => {
+            let phase = std::f32::consts::TAU * p.x;
+            Vec4::new(std::f32::consts::TAU * phase.cos(), 0.0, 0.0, phase.sin())
+        }
     };
     // Chain rule for p = frequency · uv.
     Vec4::new(n.x * bump.frequency, n.y * bump.frequency, n.z * bump.frequency, n.w)

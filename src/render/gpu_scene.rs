@@ -13,6 +13,9 @@ pub struct GpuPrimitive {
     pub uvs: Buffer,
     /// COLOR_0 as linear RGBA, white when the mesh has none.
     pub colors: Buffer,
+    /// Surface derivatives Q_u and Q_v, zeros when the mesh has no UVs (bump mapping is then off).
+    pub dpdu: Buffer,
+    pub dpdv: Buffer,
     pub indices: Buffer,
     pub index_count: u32,
     pub vertex_count: u32,
@@ -70,6 +73,19 @@ impl GpuScene {
                     vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
                     16,
                 )?;
+                let derivative = |name: &str, values: &[glam::Vec3]| {
+                    let data =
+                        if values.is_empty() { vec![glam::Vec3::ZERO; p.positions.len()] } else { values.to_vec() };
+                    Buffer::device_local_with_data(
+                        device,
+                        name,
+                        &data,
+                        vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
+                        16,
+                    )
+                };
+                let dpdu = derivative(&format!("{name} dpdu"), &p.dpdu)?;
+                let dpdv = derivative(&format!("{name} dpdv"), &p.dpdv)?;
                 let indices = Buffer::device_local_with_data(
                     device,
                     &format!("{name} indices"),
@@ -82,6 +98,8 @@ impl GpuScene {
                     normals,
                     uvs,
                     colors,
+                    dpdu,
+                    dpdv,
                     indices,
                     index_count: p.indices.len() as u32,
                     vertex_count: p.positions.len() as u32,

@@ -1,4 +1,6 @@
 //! The frame: joins the CPU scene to Vulkan. Each pass owns its pipeline and records into a command buffer.
+pub mod gbuffer;
+pub mod gbuffer_layout;
 pub mod gpu_scene;
 pub mod noise_probe;
 pub mod preview;

@@ -117,6 +117,8 @@ pub enum NoiseKind {
     Noise,
     Fbm,
     Turbulence,
+    /// B = sin(2π·frequency·u): an analytic ripple along u, for checking bump mapping against a closed form.
+    Sine,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -327,7 +327,7 @@ pub fn texel_size(format: vk::Format) -> Option<usize> {
         vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB | vk::Format::B8G8R8A8_UNORM => 4,
         vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
         vk::Format::R16G16B16A16_SFLOAT => 8,
-        vk::Format::R32G32_SFLOAT => 8,
+        vk::Format::R32G32_SFLOAT | vk::Format::R32G32_UINT => 8,
         vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
         _ => return None,
     })

@@ -39,7 +39,24 @@ impl Readback {
             vk::Format::R8G8B8A8_UNORM => {
                 Ok(self.bytes.chunks_exact(4).map(|c| std::array::from_fn(|i| f32::from(c[i]) / 255.0)).collect())
             }
+            vk::Format::R8G8B8A8_SRGB => Ok(self
+                .bytes
+                .chunks_exact(4)
+                .map(|c| {
+                    let unorm = |v: u8| f32::from(v) / 255.0;
+                    let linear = |v: u8| crate::output::srgb_to_linear(unorm(v));
+                    [linear(c[0]), linear(c[1]), linear(c[2]), unorm(c[3])]
+                })
+                .collect()),
             other => Err(anyhow!("cannot convert {other:?} texels to RGBA float")),
+        }
+    }
+
+    /// Every texel of an `R32G32_UINT` image, row-major.
+    pub fn to_uvec2(&self) -> Result<Vec<[u32; 2]>> {
+        match self.format {
+            vk::Format::R32G32_UINT => Ok(bytemuck::pod_collect_to_vec(&self.bytes)),
+            other => Err(anyhow!("cannot read {other:?} texels as two unsigned integers")),
         }
     }
 }

@@ -5,6 +5,8 @@
 //! A missing layer or ray-query device fails the test with a message that says to run scripts/setup.sh.
 #![allow(dead_code)]
 
+pub mod raycast;
+
 use std::sync::Arc;
 use strata::vk::validation::ValidationLog;
 use strata::vk::{Device, Gpu, GpuOptions};

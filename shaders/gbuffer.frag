@@ -1,0 +1,70 @@
+#version 460
+// G-buffer pass: material evaluation and Blinn bump mapping (Blinn 1978) of the shading normal with a Perlin
+// height field (Perlin 1985, 2002), evaluated procedurally here.
+#extension GL_EXT_nonuniform_qualifier : require
+#extension GL_EXT_scalar_block_layout : require
+#include "gbuffer_layout.glsl"
+
+layout(set = 0, binding = 2) uniform sampler2D textures[];
+
+layout(location = 0) in vec3 in_world_position;
+layout(location = 1) in vec3 in_world_normal;
+layout(location = 2) in vec2 in_uv;
+layout(location = 3) in vec4 in_color;
+layout(location = 4) in vec3 in_dpdu;
+layout(location = 5) in vec3 in_dpdv;
+layout(location = 6) flat in uint in_draw;
+
+layout(location = 0) out vec4 out_position;
+layout(location = 1) out vec4 out_shading_normal;
+layout(location = 2) out vec4 out_geometric_normal;
+layout(location = 3) out vec4 out_albedo;
+layout(location = 4) out vec4 out_material;
+layout(location = 5) out vec4 out_emission;
+layout(location = 6) out uvec2 out_ids;
+
+vec2 transform_uv(vec4 rows[2], vec2 uv) {
+    vec3 h = vec3(uv, 1.0);
+    return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
+}
+
+void main() {
+    GBufferDraw d = draws[in_draw];
+    GpuMaterial m = materials[d.material];
+
+    vec4 base = m.base_color * in_color;
+    if (m.base_color_texture >= 0) {
+        base *= texture(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, in_uv));
+    }
+    // MASK discards below the cutoff; BLEND is drawn as coverage at 0.5 (no order-independent transparency).
+    if ((m.alpha_mode == 1 && base.a < m.alpha_cutoff) || (m.alpha_mode == 2 && base.a < 0.5)) discard;
+
+    // The face normal from screen-space derivatives, turned to the interpolated normal's side.
+    vec3 face = cross(dFdx(in_world_position), dFdy(in_world_position));
+    float face_len = length(face);
+    vec3 n = in_world_normal;
+    float n_len = length(n);
+    vec3 geometric = face_len > 0.0 ? face / face_len : (n_len > 0.0 ? n / n_len : vec3(0.0, 0.0, 1.0));
+    if (n_len > 0.0 && dot(geometric, n) < 0.0) geometric = -geometric;
+    if (!(n_len > 0.0)) n = geometric;
+
+    float height = 0.0;
+    vec3 shading = normalize(n);
+    if (m.bump.kind != BUMP_NONE) {
+        height = bump_height(m.bump, in_uv);
+        shading = bump_perturb_normal(n, in_dpdu, in_dpdv, bump_height_gradient(m.bump, in_uv));
+    }
+    // Double-sided faces seen from behind: the same surface, so its normals flip toward the viewer.
+    if (!gl_FrontFacing && m.double_sided != 0) {
+        shading = -shading;
+        geometric = -geometric;
+    }
+
+    out_position = vec4(in_world_position, -dot(pc.view_z_row, vec4(in_world_position, 1.0)));
+    out_shading_normal = vec4(shading, height);
+    out_geometric_normal = vec4(geometric, 0.0);
+    out_albedo = base;
+    out_material = vec4(m.metallic, m.roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
+    out_emission = vec4(m.emissive.rgb, 0.0);
+    out_ids = uvec2(d.instance + 1u, d.material);
+}

@@ -1,0 +1,77 @@
+// Blinn bump mapping (Blinn 1978) with a procedural height field; GPU side of src/math/bump.rs.
+// N = Q_u x Q_v, n the shading normal, X = n x Q_v, Y = n x Q_u, D = B_u X - B_v Y,
+// N' = normalize(n + sigma D / |N|), sigma = sign(n . N) so mirrored UVs keep bumps outward (DESIGN.md).
+#ifndef BUMP_GLSL
+#define BUMP_GLSL
+#include "noise.glsl"
+
+const int BUMP_NONE = -1;
+const int BUMP_NOISE = 0;
+const int BUMP_FBM = 1;
+const int BUMP_TURBULENCE = 2;
+const int BUMP_SINE = 3;
+const int BUMP_CENTRAL_DIFFERENCES = 0;
+const int BUMP_ANALYTIC = 1;
+
+// Mirrors `GpuBump` in src/render/gpu_material.rs.
+struct Bump {
+    int kind;
+    float amplitude;
+    float frequency;
+    uint octaves;
+    float lacunarity;
+    float gain;
+    int derivative;
+    float epsilon;
+};
+
+// The field at uv before the amplitude: value in w, gradient with respect to (u, v) in xy.
+vec4 bump_field(Bump b, vec2 uv) {
+    vec3 p = vec3(uv * b.frequency, 0.0);
+    vec4 n;
+    if (b.kind == BUMP_NOISE) {
+        n = noise_with_gradient(p);
+    } else if (b.kind == BUMP_FBM) {
+        n = fbm_with_gradient(p, b.octaves, b.lacunarity, b.gain);
+    } else if (b.kind == BUMP_TURBULENCE) {
+        n = turbulence_with_gradient(p, b.octaves, b.lacunarity, b.gain);
+    } else {
+        const float TAU = 6.28318530717958647692;
+        float phase = TAU * p.x;
+        n = vec4(TAU * cos(phase), 0.0, 0.0, sin(phase));
+    }
+    return vec4(n.x * b.frequency, n.y * b.frequency, n.z * b.frequency, n.w);
+}
+
+float bump_height(Bump b, vec2 uv) {
+    return b.amplitude * bump_field(b, uv).w;
+}
+
+// (B_u, B_v) by central differences with step epsilon, or analytically.
+vec2 bump_height_gradient(Bump b, vec2 uv) {
+    if (b.derivative == BUMP_ANALYTIC) {
+        return b.amplitude * bump_field(b, uv).xy;
+    }
+    float e = b.epsilon;
+    float du = bump_height(b, uv + vec2(e, 0.0)) - bump_height(b, uv - vec2(e, 0.0));
+    float dv = bump_height(b, uv + vec2(0.0, e)) - bump_height(b, uv - vec2(0.0, e));
+    return vec2(du, dv) / (2.0 * e);
+}
+
+// Blinn's perturbed normal; degenerate derivatives or a zero normal give the unperturbed normal, never NaN.
+vec3 bump_perturb_normal(vec3 n, vec3 dpdu, vec3 dpdv, vec2 grad) {
+    float n_len = length(n);
+    if (!(n_len > 0.0)) return vec3(0.0);
+    vec3 n_hat = n / n_len;
+    vec3 big_n = cross(dpdu, dpdv);
+    float len = length(big_n);
+    if (isnan(len) || len <= 1e-12 || any(isnan(grad)) || any(isinf(grad))) return n_hat;
+    float sigma = dot(n_hat, big_n) < 0.0 ? -1.0 : 1.0;
+    vec3 x = cross(n_hat, dpdv);
+    vec3 y = cross(n_hat, dpdu);
+    vec3 d = x * grad.x - y * grad.y;
+    vec3 bumped = n_hat + d * (sigma / len);
+    float b_len = length(bumped);
+    return b_len > 0.0 ? bumped / b_len : n_hat;
+}
+#endif

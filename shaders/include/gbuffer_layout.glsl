@@ -1,0 +1,52 @@
+// The G-buffer pass's data; mirrored by src/render/gbuffer_layout.rs (size/offset tests there).
+#ifndef GBUFFER_LAYOUT_GLSL
+#define GBUFFER_LAYOUT_GLSL
+#include "bump.glsl"
+
+// Attachment locations (formats in gbuffer_layout.rs):
+//   0 position          RGBA32F   world xyz, w = view depth of this sample's eye
+//   1 shading normal    RGBA32F   bumped world normal xyz, w = bump height B(u, v)
+//   2 geometric normal  RGBA16F   face normal xyz, facing the same side as the shading normal
+//   3 albedo            RGBA8 sRGB  base colour x texture x vertex colour, a = alpha
+//   4 material          RGBA8     metallic, roughness, transmission, (ior - 1) / 3
+//   5 emission          RGBA16F   emitted radiance rgb
+//   6 ids               RG32UI    instance index + 1 (0: nothing), material index
+
+struct GBufferDraw {
+    mat4 world_from_object;
+    // Rows of the world-normal matrix (inverse transpose), padded to vec4.
+    vec4 normal_rows[3];
+    uint material;
+    uint instance;
+    uint pad0;
+    uint pad1;
+};
+
+struct GpuMaterial {
+    vec4 base_color;
+    vec4 emissive;
+    float metallic;
+    float roughness;
+    float transmission;
+    float ior;
+    float normal_scale;
+    float alpha_cutoff;
+    int alpha_mode;          // 0 opaque, 1 mask, 2 blend
+    int double_sided;
+    int base_color_texture;  // -1: none
+    int base_color_tex_coord;
+    int normal_texture;
+    int emissive_texture;
+    vec4 base_color_uv_rows[2];
+    Bump bump;               // kind BUMP_NONE: no bump
+};
+
+layout(set = 0, binding = 0, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
+layout(set = 0, binding = 1, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };
+
+layout(push_constant, std430) uniform GBufferPush {
+    mat4 clip_from_world;
+    // Third row of view_from_world: view depth = -dot(view_z_row, vec4(p, 1)).
+    vec4 view_z_row;
+} pc;
+#endif

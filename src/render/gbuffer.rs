@@ -1,0 +1,289 @@
+//! The G-buffer pass: for one camera sample (lens point, jitter) and one time, rasterizes every instance into the
+//! attachments of `gbuffer_layout` with dynamic rendering; the fragment shader evaluates the material and the
+//! Blinn bump-mapped normal. One pipeline draws every material: materials in a storage buffer, textures in a
+//! combined-image-sampler array indexed per material.
+use super::gbuffer_layout::{GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT, IDS};
+use super::gpu_scene::GpuScene;
+use super::textures::GpuTextures;
+use crate::math::lens::CameraSample;
+use crate::scene::{Material, Scene};
+use crate::shaders;
+use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
+use crate::vk::descriptors::DescriptorSet;
+use crate::vk::pipeline::{Binding, GraphicsDesc, Pipeline};
+use crate::vk::readback::read_image;
+use crate::vk::{Buffer, Device, Image};
+use anyhow::{bail, Result};
+use ash::vk;
+use glam::Mat4;
+use std::sync::Arc;
+
+/// The G-buffer's images for one image size.
+pub struct GBuffer {
+    pub color: Vec<Image>,
+    pub depth: Image,
+    pub extent: vk::Extent2D,
+}
+
+impl GBuffer {
+    pub fn new(device: &Arc<Device>, width: u32, height: u32) -> Result<Self> {
+        let extent = vk::Extent2D { width, height };
+        let usage =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+        let color = ATTACHMENTS
+            .iter()
+            .map(|a| Image::new_2d(device, &format!("gbuffer {}", a.name), a.format, extent, usage))
+            .collect::<Result<Vec<_>>>()?;
+        let depth = Image::new_2d(
+            device,
+            "gbuffer depth",
+            DEPTH_FORMAT,
+            extent,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        )?;
+        Ok(Self { color, depth, extent })
+    }
+}
+
+/// The G-buffer's contents on the host, one entry per pixel, row-major.
+#[derive(Debug, Clone)]
+pub struct GBufferFrame {
+    pub width: u32,
+    pub height: u32,
+    /// Per attachment except `ids`, as linear RGBA floats (albedo decoded from sRGB).
+    pub channels: Vec<Vec<[f32; 4]>>,
+    /// (instance + 1, material); (0, _) where nothing was drawn.
+    pub ids: Vec<[u32; 2]>,
+}
+
+impl GBufferFrame {
+    pub fn at(&self, attachment: usize, x: u32, y: u32) -> [f32; 4] {
+        self.channels[attachment][(y * self.width + x) as usize]
+    }
+
+    pub fn covered(&self, x: u32, y: u32) -> bool {
+        self.ids[(y * self.width + x) as usize][0] != 0
+    }
+}
+
+/// The scene's draws and materials for one time, ready to record.
+pub struct GBufferInputs {
+    // Kept alive while the descriptor set refers to them.
+    _draws: Buffer,
+    _materials: Buffer,
+    set: DescriptorSet,
+    /// (mesh, primitive) per draw record, in draw order.
+    order: Vec<(usize, usize)>,
+}
+
+pub struct GBufferPass {
+    pipeline: Pipeline,
+    device: Arc<Device>,
+}
+
+const VERTEX_STREAMS: [(u32, vk::Format); 6] = [
+    (12, vk::Format::R32G32B32_SFLOAT),    // position
+    (12, vk::Format::R32G32B32_SFLOAT),    // normal
+    (8, vk::Format::R32G32_SFLOAT),        // uv
+    (16, vk::Format::R32G32B32A32_SFLOAT), // colour
+    (12, vk::Format::R32G32B32_SFLOAT),    // dpdu
+    (12, vk::Format::R32G32B32_SFLOAT),    // dpdv
+];
+
+impl GBufferPass {
+    /// A G-buffer pipeline for scenes with `texture_count` textures (at least one: see `GpuTextures`).
+    pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
+        let vertex_bindings: Vec<vk::VertexInputBindingDescription> = VERTEX_STREAMS
+            .iter()
+            .enumerate()
+            .map(|(i, (stride, _))| vk::VertexInputBindingDescription::default().binding(i as u32).stride(*stride))
+            .collect();
+        let vertex_attributes: Vec<vk::VertexInputAttributeDescription> = VERTEX_STREAMS
+            .iter()
+            .enumerate()
+            .map(|(i, (_, format))| {
+                vk::VertexInputAttributeDescription::default().location(i as u32).binding(i as u32).format(*format)
+            })
+            .collect();
+        let bindings = [
+            Binding::new(0, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
+            Binding { binding: 2, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+        ];
+        let formats: Vec<vk::Format> = ATTACHMENTS.iter().map(|a| a.format).collect();
+        let pipeline = Pipeline::graphics(
+            device,
+            &GraphicsDesc {
+                name: "gbuffer pipeline",
+                vertex: ("gbuffer.vert", shaders::GBUFFER_VERT),
+                fragment: ("gbuffer.frag", shaders::GBUFFER_FRAG),
+                bindings: &bindings,
+                push_constant_size: std::mem::size_of::<GBufferPush>() as u32,
+                vertex_bindings: &vertex_bindings,
+                vertex_attributes: &vertex_attributes,
+                color_formats: &formats,
+                depth_format: Some(DEPTH_FORMAT),
+                additive_blend: false,
+                cull_mode: vk::CullModeFlags::NONE,
+            },
+        )?;
+        Ok(Self { pipeline, device: device.clone() })
+    }
+
+    /// Draw records for `scene` with instance transforms `transforms` (one per instance, e.g. at a sample's time).
+    pub fn inputs(
+        &self,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        textures: &GpuTextures,
+        transforms: &[Mat4],
+    ) -> Result<GBufferInputs> {
+        if transforms.len() != scene.instances.len() {
+            bail!("{} transforms for {} instances", transforms.len(), scene.instances.len());
+        }
+        let default_material = scene.materials.len() as u32;
+        let mut records = Vec::new();
+        let mut order = Vec::new();
+        for (i, (instance, transform)) in scene.instances.iter().zip(transforms).enumerate() {
+            for (p, primitive) in gpu_scene.meshes[instance.mesh].primitives.iter().enumerate() {
+                let material = primitive.material.map(|m| m as u32).unwrap_or(default_material);
+                records.push(GBufferDraw::new(*transform, material, i as u32));
+                order.push((instance.mesh, p));
+            }
+        }
+        if records.is_empty() {
+            records.push(bytemuck::Zeroable::zeroed());
+        }
+        let mut materials: Vec<GpuMaterial> =
+            scene.materials.iter().map(|m| GpuMaterial::new(m, textures.images.len())).collect();
+        materials.push(GpuMaterial::new(&Material::default(), textures.images.len()));
+        let device = &self.device;
+        let draws = Buffer::with_data(device, "gbuffer draws", &records, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let materials_buffer =
+            Buffer::with_data(device, "gbuffer materials", &materials, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let set = self.pipeline.new_descriptor_set("gbuffer set")?;
+        set.storage_buffer(0, &draws)
+            .storage_buffer(1, &materials_buffer)
+            .combined_image_samplers(2, &textures.bindings());
+        Ok(GBufferInputs { _draws: draws, _materials: materials_buffer, set, order })
+    }
+
+    /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
+    /// (written by `COLOR_ATTACHMENT_OUTPUT`) for the caller's next barrier.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        gbuffer: &GBuffer,
+        gpu_scene: &GpuScene,
+        inputs: &GBufferInputs,
+        sample: &CameraSample,
+    ) {
+        let device = &self.device;
+        for image in &gbuffer.color {
+            image_barrier(
+                device,
+                cmd,
+                image,
+                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
+            );
+        }
+        image_barrier(
+            device,
+            cmd,
+            &gbuffer.depth,
+            (vk::ImageLayout::UNDEFINED, Access::NONE),
+            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, Access::DEPTH_ATTACHMENT),
+        );
+        labelled(device, cmd, "gbuffer pass", || {
+            let attachments: Vec<vk::RenderingAttachmentInfo> = gbuffer
+                .color
+                .iter()
+                .enumerate()
+                .map(|(i, image)| {
+                    let clear = if i == IDS {
+                        vk::ClearColorValue { uint32: [0; 4] }
+                    } else {
+                        vk::ClearColorValue { float32: [0.0; 4] }
+                    };
+                    vk::RenderingAttachmentInfo::default()
+                        .image_view(image.view)
+                        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .load_op(vk::AttachmentLoadOp::CLEAR)
+                        .store_op(vk::AttachmentStoreOp::STORE)
+                        .clear_value(vk::ClearValue { color: clear })
+                })
+                .collect();
+            let depth = vk::RenderingAttachmentInfo::default()
+                .image_view(gbuffer.depth.view)
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+            let extent = gbuffer.extent;
+            let rendering = vk::RenderingInfo::default()
+                .render_area(extent.into())
+                .layer_count(1)
+                .color_attachments(&attachments)
+                .depth_attachment(&depth);
+            let push =
+                GBufferPush { clip_from_world: sample.clip_from_world(), view_z_row: sample.view_from_world.row(2) };
+            unsafe {
+                device.raw.cmd_begin_rendering(cmd, &rendering);
+                let viewport = vk::Viewport::default()
+                    .width(extent.width as f32)
+                    .height(extent.height as f32)
+                    .min_depth(0.0)
+                    .max_depth(1.0);
+                device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
+                device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
+            }
+            self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
+            for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {
+                let primitive = &gpu_scene.meshes[mesh].primitives[p];
+                let buffers = [
+                    primitive.positions.raw,
+                    primitive.normals.raw,
+                    primitive.uvs.raw,
+                    primitive.colors.raw,
+                    primitive.dpdu.raw,
+                    primitive.dpdv.raw,
+                ];
+                unsafe {
+                    device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &[0; 6]);
+                    device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
+                    // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).
+                    device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, draw_index as u32);
+                }
+            }
+            unsafe { device.raw.cmd_end_rendering(cmd) };
+        });
+    }
+
+    /// Renders one sample and reads every attachment back (for AOVs and tests).
+    pub fn render_to_host(
+        &self,
+        gbuffer: &GBuffer,
+        gpu_scene: &GpuScene,
+        inputs: &GBufferInputs,
+        sample: &CameraSample,
+    ) -> Result<GBufferFrame> {
+        let device = &self.device;
+        submit_and_wait(device, "gbuffer frame", |cmd| {
+            self.record(cmd, gbuffer, gpu_scene, inputs, sample);
+            Ok(())
+        })?;
+        let mut channels = Vec::new();
+        let mut ids = Vec::new();
+        for (i, image) in gbuffer.color.iter().enumerate() {
+            let readback =
+                read_image(device, image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE)?;
+            if i == IDS {
+                ids = readback.to_uvec2()?;
+            } else {
+                channels.push(readback.to_rgba_f32()?);
+            }
+        }
+        Ok(GBufferFrame { width: gbuffer.extent.width, height: gbuffer.extent.height, channels, ids })
+    }
+}

@@ -1,0 +1,198 @@
+//! The G-buffer's layout, defined once for Rust; mirrored by `shaders/include/gbuffer_layout.glsl` (the tests
+//! below pin sizes and offsets to the GLSL std430 rules).
+use crate::scene::{AlphaMode, BumpDerivative, BumpMap, Material, NoiseKind};
+use ash::vk;
+use glam::{Mat3, Mat4, Vec4};
+
+/// One colour attachment: its debug name and format. World position is stored, not reconstructed from depth:
+/// the accumulation pass starts rays there and needs full precision, and each sample has its own sheared,
+/// jittered projection that reconstruction would have to replay.
+pub struct Attachment {
+    pub name: &'static str,
+    pub format: vk::Format,
+}
+
+pub const ATTACHMENTS: [Attachment; 7] = [
+    Attachment { name: "position", format: vk::Format::R32G32B32A32_SFLOAT },
+    Attachment { name: "shading normal", format: vk::Format::R32G32B32A32_SFLOAT },
+    Attachment { name: "geometric normal", format: vk::Format::R16G16B16A16_SFLOAT },
+    Attachment { name: "albedo", format: vk::Format::R8G8B8A8_SRGB },
+    Attachment { name: "material", format: vk::Format::R8G8B8A8_UNORM },
+    Attachment { name: "emission", format: vk::Format::R16G16B16A16_SFLOAT },
+    Attachment { name: "ids", format: vk::Format::R32G32_UINT },
+];
+pub const POSITION: usize = 0;
+pub const SHADING_NORMAL: usize = 1;
+pub const GEOMETRIC_NORMAL: usize = 2;
+pub const ALBEDO: usize = 3;
+pub const MATERIAL: usize = 4;
+pub const EMISSION: usize = 5;
+pub const IDS: usize = 6;
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// Bytes per pixel of the G-buffer, depth included (for the memory budget).
+pub fn bytes_per_pixel() -> usize {
+    ATTACHMENTS.iter().map(|a| crate::vk::memory::texel_size(a.format).unwrap_or(4)).sum::<usize>() + 4
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GBufferPush {
+    pub clip_from_world: Mat4,
+    pub view_z_row: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GBufferDraw {
+    pub world_from_object: Mat4,
+    pub normal_rows: [Vec4; 3],
+    pub material: u32,
+    pub instance: u32,
+    pub pad: [u32; 2],
+}
+
+impl GBufferDraw {
+    pub fn new(world_from_object: Mat4, material: u32, instance: u32) -> Self {
+        let normal = Mat3::from_mat4(world_from_object).inverse().transpose();
+        let normal = if normal.is_finite() { normal } else { Mat3::ZERO };
+        Self {
+            world_from_object,
+            normal_rows: [0, 1, 2].map(|r| normal.row(r).extend(0.0)),
+            material,
+            instance,
+            pad: [0; 2],
+        }
+    }
+}
+
+/// Mirrors `Bump` in `bump.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuBump {
+    pub kind: i32,
+    pub amplitude: f32,
+    pub frequency: f32,
+    pub octaves: u32,
+    pub lacunarity: f32,
+    pub gain: f32,
+    pub derivative: i32,
+    pub epsilon: f32,
+}
+
+impl GpuBump {
+    pub const NONE: GpuBump = GpuBump {
+        kind: -1,
+        amplitude: 0.0,
+        frequency: 1.0,
+        octaves: 1,
+        lacunarity: 2.0,
+        gain: 0.5,
+        derivative: 0,
+        epsilon: 1.0 / 64.0,
+    };
+
+    pub fn from_bump(bump: Option<&BumpMap>) -> Self {
+        let Some(b) = bump else { return Self::NONE };
+        Self {
+            kind: match b.kind {
+                NoiseKind::Noise => 0,
+                NoiseKind::Fbm => 1,
+                NoiseKind::Turbulence => 2,
+                NoiseKind::Sine => 3,
+            },
+            amplitude: b.amplitude,
+            frequency: b.frequency,
+            octaves: b.octaves,
+            lacunarity: b.lacunarity,
+            gain: b.gain,
+            derivative: match b.derivative {
+                BumpDerivative::CentralDifferences => 0,
+                BumpDerivative::Analytic => 1,
+            },
+            epsilon: b.epsilon,
+        }
+    }
+}
+
+/// Mirrors `GpuMaterial` in `gbuffer_layout.glsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuMaterial {
+    pub base_color: Vec4,
+    pub emissive: Vec4,
+    pub metallic: f32,
+    pub roughness: f32,
+    pub transmission: f32,
+    pub ior: f32,
+    pub normal_scale: f32,
+    pub alpha_cutoff: f32,
+    pub alpha_mode: i32,
+    pub double_sided: i32,
+    pub base_color_texture: i32,
+    pub base_color_tex_coord: i32,
+    pub normal_texture: i32,
+    pub emissive_texture: i32,
+    pub base_color_uv_rows: [Vec4; 2],
+    pub bump: GpuBump,
+}
+
+impl GpuMaterial {
+    pub fn new(m: &Material, texture_count: usize) -> Self {
+        let texture = |t: Option<crate::scene::TextureRef>| {
+            t.filter(|t| t.texture < texture_count).map(|t| t.texture as i32).unwrap_or(-1)
+        };
+        let uv = m.base_color_texture.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
+        let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
+            AlphaMode::Opaque => (0, 0.0),
+            AlphaMode::Mask { cutoff } => (1, cutoff),
+            AlphaMode::Blend => (2, 0.5),
+        };
+        Self {
+            base_color: m.base_color,
+            emissive: m.emissive.extend(0.0),
+            metallic: m.metallic,
+            roughness: m.roughness,
+            transmission: m.transmission,
+            ior: m.ior,
+            normal_scale: m.normal_scale,
+            alpha_cutoff,
+            alpha_mode,
+            double_sided: i32::from(m.double_sided),
+            base_color_texture: texture(m.base_color_texture),
+            base_color_tex_coord: m.base_color_texture.map(|t| t.tex_coord as i32).unwrap_or(0),
+            normal_texture: texture(m.normal_texture),
+            emissive_texture: texture(m.emissive_texture),
+            base_color_uv_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
+            bump: GpuBump::from_bump(m.bump.as_ref()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    #[test]
+    fn layouts_match_glsl_std430() {
+        assert_eq!(size_of::<GBufferPush>(), 80);
+        assert_eq!(size_of::<GBufferDraw>(), 128);
+        assert_eq!(offset_of!(GBufferDraw, normal_rows), 64);
+        assert_eq!(offset_of!(GBufferDraw, material), 112);
+        assert_eq!(size_of::<GpuBump>(), 32);
+        assert_eq!(offset_of!(GpuMaterial, emissive), 16);
+        assert_eq!(offset_of!(GpuMaterial, metallic), 32);
+        assert_eq!(offset_of!(GpuMaterial, alpha_mode), 56);
+        assert_eq!(offset_of!(GpuMaterial, base_color_texture), 64);
+        assert_eq!(offset_of!(GpuMaterial, base_color_uv_rows), 80);
+        assert_eq!(offset_of!(GpuMaterial, bump), 112);
+        assert_eq!(size_of::<GpuMaterial>(), 144);
+    }
+
+    #[test]
+    fn the_gbuffer_fits_its_memory_budget() {
+        // Issue 5's budget is 100 bytes per pixel in all; the G-buffer takes 68 of them.
+        assert_eq!(bytes_per_pixel(), 68);
+    }
+}
