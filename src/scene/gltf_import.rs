@@ -132,6 +132,15 @@ fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
             }
         }
     }
+    // Images need a uri or a bufferView, and a bufferView needs a mimeType (glTF 2.0 §5.17); gltf's
+    // Image::source() unwraps both (fuzz finding).
+    for (i, image) in root.images.iter().enumerate() {
+        match (&image.uri, &image.buffer_view, &image.mime_type) {
+            (_, Some(_), None) => bail!("not a valid glTF file: image {i} has a bufferView but no mimeType"),
+            (None, None, _) => bail!("not a valid glTF file: image {i} has neither a uri nor a bufferView"),
+            _ => {}
+        }
+    }
     // Any other panic in third-party validation becomes an error rather than taking the process down.
     match std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes)) {
         Ok(result) => result.map_err(|e| anyhow!("not a valid glTF file: {e}")),
