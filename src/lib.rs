@@ -69,3 +69,26 @@ pub fn render_preview(
     let pass = render::PreviewPass::new(&gpu.device, textures.images.len() as u32)?;
     pass.render(scene, &gpu_scene, &textures, settings)
 }
+
+/// Renders the G-buffer once (pinhole through the lens centre, no jitter, at the shutter's opening) and returns
+/// the requested AOVs as raw values.
+pub fn render_aovs(
+    gpu: &vk::Gpu,
+    scene: &scene::Scene,
+    width: u32,
+    height: u32,
+    aovs: &[render::aov::Aov],
+) -> Result<Vec<(render::aov::Aov, output::Frame)>> {
+    let device = &gpu.device;
+    let gpu_scene = render::GpuScene::upload(device, scene)?;
+    let textures = render::textures::GpuTextures::upload(device, scene)?;
+    let pass = render::gbuffer::GBufferPass::new(device, textures.images.len() as u32)?;
+    let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
+    let transforms = scene.instance_transforms_at(scene.shutter.0);
+    let inputs = pass.inputs(scene, &gpu_scene, &textures, &transforms)?;
+    let mut camera = scene.camera_at(scene.shutter.0);
+    camera.lens.aperture_radius = 0.0;
+    let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO);
+    let frame = pass.render_to_host(&gbuffer, &gpu_scene, &inputs, &sample)?;
+    aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame)?))).collect()
+}

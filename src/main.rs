@@ -60,6 +60,11 @@ struct RenderArgs {
     /// 0.02,0.02,0.025].
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     background: Option<[f32; 3]>,
+    /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
+    /// emission, material. With -o x.exr they are layers of the EXR (raw values); with -o x.png each is a PNG
+    /// beside it, x.<name>.png (normals as ½+½n, depth and height scaled to their range).
+    #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
+    aov: Option<AovList>,
     /// Let the glTF read files outside its own directory (absolute paths, ".."). Network URIs are never fetched.
     #[arg(long)]
     allow_any_uri: bool,
@@ -86,6 +91,14 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
         Ok(v)
     };
     Ok((side(w)?, side(h)?))
+}
+
+/// The parsed `--aov` list (a newtype: clap reads a bare `Vec` as a multi-value option).
+#[derive(Clone)]
+struct AovList(Vec<strata::render::aov::Aov>);
+
+fn parse_aovs(text: &str) -> Result<AovList, String> {
+    strata::render::aov::Aov::parse_list(text).map(AovList).map_err(|e| e.to_string())
 }
 
 fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
@@ -155,13 +168,17 @@ fn render(args: RenderArgs) -> Result<()> {
         background: settings.background.to_array(),
     };
     let frame = strata::render_preview(&gpu, &scene, &preview)?;
+    let aovs = match &args.aov {
+        Some(list) => strata::render_aovs(&gpu, &scene, settings.width, settings.height, &list.0)?,
+        None => Vec::new(),
+    };
     let device_name = gpu.device.report.name.clone();
     drop(gpu);
     if args.gpu.validate {
         // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
-    strata::output::write_frame(&output, &frame)?;
+    write_outputs(&output, &frame, &aovs)?;
     eprintln!(
         "strata: wrote {} ({}x{}, {} triangles, {} instances) on {device_name} in {:.2} s",
         output.display(),
@@ -171,6 +188,31 @@ fn render(args: RenderArgs) -> Result<()> {
         scene.instances.len(),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+/// The beauty image, then the AOVs: layers of an EXR, or PNGs beside a PNG.
+fn write_outputs(
+    output: &std::path::Path,
+    frame: &strata::output::Frame,
+    aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
+) -> Result<()> {
+    use strata::output::{write_data_png, write_frame, write_frame_with_layers, OutputFormat};
+    if OutputFormat::from_path(output)? == OutputFormat::Exr {
+        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
+        return write_frame_with_layers(output, frame, &layers);
+    }
+    write_frame(output, frame)?;
+    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    for (aov, raw) in aovs {
+        let path = output.with_file_name(format!("{stem}.{}.png", aov.name()));
+        if aov.is_color() {
+            write_frame(&path, raw)?;
+        } else {
+            write_data_png(&path, &aov.for_display(raw))?;
+        }
+        eprintln!("strata: wrote {}", path.display());
+    }
     Ok(())
 }
 

@@ -78,6 +78,24 @@ pub fn to_srgb8(frame: &Frame) -> Vec<u8> {
         .collect()
 }
 
+/// Writes a data image (normals, depth, ...) as an 8-bit PNG: values in [0, 1] quantized directly, without
+/// the sRGB curve, atomically.
+pub fn write_data_png(path: &Path, frame: &Frame) -> Result<()> {
+    if OutputFormat::from_path(path)? != OutputFormat::Png {
+        bail!("{}: data images are written as .png", path.display());
+    }
+    let bytes: Vec<u8> = frame
+        .pixels
+        .iter()
+        .flat_map(|p| p.map(|v| (if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) } * 255.0 + 0.5).floor() as u8))
+        .collect();
+    write_atomic(path, |file| {
+        let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
+        image::ImageEncoder::write_image(encoder, &bytes, frame.width, frame.height, image::ExtendedColorType::Rgba8)
+            .context("encoding PNG")
+    })
+}
+
 /// Writes `frame` to `path` in the format its extension names, atomically.
 pub fn write_frame(path: &Path, frame: &Frame) -> Result<()> {
     write_frame_with_layers(path, frame, &[])

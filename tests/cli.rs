@@ -194,3 +194,63 @@ fn help_teaches_every_command() {
         assert!(render_help.contains(option), "render --help lacks {option}");
     }
 }
+
+#[test]
+fn aovs_are_written_as_exr_layers_and_png_siblings() {
+    let dir = temp_dir("aov");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
+    let exr_path = dir.join("cornell.exr");
+    let out = strata(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        exr_path.to_str().unwrap(),
+        "--size",
+        "48x48",
+        "--aov",
+        "normal,depth,height",
+        "--validate",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
+    let channels = &image.layer_data[0].channel_data.list;
+    let get = |name: &str| match &channels.iter().find(|c| c.name.to_string() == name).unwrap().sample_data {
+        exr::prelude::FlatSamples::F32(v) => v.clone(),
+        other => panic!("{name}: {other:?}"),
+    };
+    let (nx, ny, nz, covered) = (get("normal.R"), get("normal.G"), get("normal.B"), get("normal.A"));
+    let depth = get("depth.R");
+    let mut seen = 0;
+    for i in 0..nx.len() {
+        if covered[i] > 0.0 {
+            seen += 1;
+            let length = (nx[i] * nx[i] + ny[i] * ny[i] + nz[i] * nz[i]).sqrt();
+            assert!((length - 1.0).abs() < 1e-4, "pixel {i}: |n| = {length}");
+            // The box spans 2 m in front of a camera 3.9 m away: depths between 2.9 and 4.9 m.
+            assert!(depth[i] > 2.8 && depth[i] < 5.0, "pixel {i}: depth {}", depth[i]);
+        }
+    }
+    // The box fills most of the frame; its open front edge shows a border of background.
+    assert!(seen > 48 * 48 * 8 / 10, "only {seen} of {} pixels covered", 48 * 48);
+    // The height channel varies where walls are bumped.
+    let height = get("height.R");
+    assert!(height.iter().any(|&h| h != 0.0));
+    // PNG output puts each AOV beside the picture.
+    let png = dir.join("cornell.png");
+    let out = strata(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        "32x32",
+        "--aov",
+        "albedo,normal",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    for name in ["cornell.png", "cornell.albedo.png", "cornell.normal.png"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let bad = strata(&["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--aov", "normals"]);
+    assert!(!bad.status.success() && stderr(&bad).contains("unknown AOV \"normals\""));
+}

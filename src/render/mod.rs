@@ -1,4 +1,5 @@
 //! The frame: joins the CPU scene to Vulkan. Each pass owns its pipeline and records into a command buffer.
+pub mod aov;
 pub mod gbuffer;
 pub mod gbuffer_layout;
 pub mod gpu_scene;
