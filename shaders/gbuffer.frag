@@ -51,8 +51,9 @@ void main() {
     float height = 0.0;
     vec3 shading = normalize(n);
     if (m.bump.kind != BUMP_NONE) {
-        height = bump_height(m.bump, in_uv);
-        shading = bump_perturb_normal(n, in_dpdu, in_dpdv, bump_height_gradient(m.bump, in_uv));
+        vec3 h = bump_height_and_gradient(m.bump, in_uv);
+        height = h.x;
+        shading = bump_perturb_normal(n, in_dpdu, in_dpdv, h.yz);
     }
     // Double-sided faces seen from behind: the same surface, so its normals flip toward the viewer.
     if (!gl_FrontFacing && m.double_sided != 0) {

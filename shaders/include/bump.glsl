@@ -47,15 +47,17 @@ float bump_height(Bump b, vec2 uv) {
     return b.amplitude * bump_field(b, uv).w;
 }
 
-// (B_u, B_v) by central differences with step epsilon, or analytically.
-vec2 bump_height_gradient(Bump b, vec2 uv) {
+// (B, B_u, B_v): the height and its gradient, by central differences with step epsilon (five field
+// evaluations) or analytically (one).
+vec3 bump_height_and_gradient(Bump b, vec2 uv) {
     if (b.derivative == BUMP_ANALYTIC) {
-        return b.amplitude * bump_field(b, uv).xy;
+        vec4 f = bump_field(b, uv);
+        return b.amplitude * vec3(f.w, f.xy);
     }
     float e = b.epsilon;
     float du = bump_height(b, uv + vec2(e, 0.0)) - bump_height(b, uv - vec2(e, 0.0));
     float dv = bump_height(b, uv + vec2(0.0, e)) - bump_height(b, uv - vec2(0.0, e));
-    return vec2(du, dv) / (2.0 * e);
+    return vec3(bump_height(b, uv), vec2(du, dv) / (2.0 * e));
 }
 
 // Blinn's perturbed normal; degenerate derivatives or a zero normal give the unperturbed normal, never NaN.

@@ -1,45 +1,60 @@
 //! Perlin's improved gradient noise (Perlin 2002, "Improving Noise") with its analytic gradient, fBm and
-//! turbulence (Perlin 1985). CPU twin of `shaders/include/noise.glsl`: same permutation, same gradient set,
+//! turbulence (Perlin 1985). CPU twin of `shaders/include/noise.glsl`: same lattice hash, same gradient set,
 //! same operation order, so the GPU agrees to float rounding.
 use glam::{Vec3, Vec4};
 
-/// Ken Perlin's reference permutation of 0..=255 (Perlin 2002).
-#[rustfmt::skip]
-pub const PERMUTATION: [u8; 256] = [
-    151,160,137,91,90,15,131,13,201,95,96,53,194,233,7,225,140,36,103,30,69,142,8,99,37,240,21,10,23,190,6,148,
-    247,120,234,75,0,26,197,62,94,252,219,203,117,35,11,32,57,177,33,88,237,149,56,87,174,20,125,136,171,168,68,175,
-    74,165,71,134,139,48,27,166,77,146,158,231,83,111,229,122,60,211,133,230,220,105,92,41,55,46,245,40,244,102,143,54,
-    65,25,63,161,1,216,80,73,209,76,132,187,208,89,18,169,200,196,135,130,116,188,159,86,164,100,109,198,173,186,3,64,
-    52,217,226,250,124,123,5,202,38,147,118,126,255,82,85,212,207,206,59,227,47,16,58,17,182,189,28,42,223,183,170,213,
-    119,248,152,2,44,154,163,70,221,153,101,155,167,43,172,9,129,22,39,253,19,98,108,110,79,113,224,232,178,185,112,104,218,
-    246,97,228,251,34,242,193,238,210,144,12,191,179,162,241,81,51,145,235,249,14,239,107,49,192,214,31,181,199,106,157,184,
-    84,204,176,115,121,50,45,127,4,150,254,138,236,205,93,222,114,67,29,24,72,243,141,128,195,78,66,215,61,156,180,
-];
-
-fn perm(i: i32) -> i32 {
-    i32::from(PERMUTATION[(i & 255) as usize])
+/// Integer hash of a lattice cell, in place of Perlin's 256-entry permutation table: a table indexed per pixel is
+/// slow on SIMD CPU rasterizers (lavapipe materializes and gathers it per call), a hash is a few multiplies on
+/// any GPU. lowbias32 (Chris Wellons, "Prospecting for Hash Functions", 2018), nested per axis.
+pub fn lattice_hash(x: i32, y: i32, z: i32) -> u32 {
+    fn lowbias32(mut v: u32) -> u32 {
+        v ^= v >> 16;
+        v = v.wrapping_mul(0x7feb_352d);
+        v ^= v >> 15;
+        v = v.wrapping_mul(0x846c_a68b);
+        v ^= v >> 16;
+        v
+    }
+    lowbias32((x as u32).wrapping_add(lowbias32((y as u32).wrapping_add(lowbias32(z as u32)))))
 }
 
-/// The 12 cube-edge gradients of improved noise, picked by the low 4 bits of the hash (16 cases, four repeated).
-fn gradient(hash: i32) -> Vec3 {
-    match hash & 15 {
-        0 => Vec3::new(1.0, 1.0, 0.0),
-        1 => Vec3::new(-1.0, 1.0, 0.0),
-        2 => Vec3::new(1.0, -1.0, 0.0),
-        3 => Vec3::new(-1.0, -1.0, 0.0),
-        4 => Vec3::new(1.0, 0.0, 1.0),
-        5 => Vec3::new(-1.0, 0.0, 1.0),
-        6 => Vec3::new(1.0, 0.0, -1.0),
-        7 => Vec3::new(-1.0, 0.0, -1.0),
-        8 => Vec3::new(0.0, 1.0, 1.0),
-        9 => Vec3::new(0.0, -1.0, 1.0),
-        10 => Vec3::new(0.0, 1.0, -1.0),
-        11 => Vec3::new(0.0, -1.0, -1.0),
-        12 => Vec3::new(1.0, 1.0, 0.0),
-        13 => Vec3::new(0.0, -1.0, 1.0),
-        14 => Vec3::new(-1.0, 1.0, 0.0),
-        _ => Vec3::new(0.0, -1.0, -1.0),
-    }
+/// The gradient of improved noise for hash `h`: Perlin's 2002 `grad()` written as a vector (12 cube edges, with
+/// four repeated to make 16 cases): u is x for h < 8 else y; v is y for h < 4, x for h = 12 or 14, else z; the
+/// low two bits negate u and v. Selects, not a table, for the same reason as [`lattice_hash`].
+pub fn gradient(hash: u32) -> Vec3 {
+    let h = hash & 15;
+    let su = if h & 1 != 0 { -1.0 } else { 1.0 };
+    let sv = if h & 2 != 0 { -1.0 } else { 1.0 };
+    let v_is_x = h == 12 || h == 14;
+    Vec3::new(
+        if h < 8 {
+            su
+        } else if v_is_x {
+            sv
+        } else {
+            0.0
+        },
+        if h < 8 {
+            if h < 4 {
+                sv
+            } else {
+                0.0
+            }
+        } else {
+            su
+        },
+        if h < 8 {
+            if h < 4 {
+                0.0
+            } else {
+                sv
+            }
+        } else if v_is_x {
+            0.0
+        } else {
+            sv
+        },
+    )
 }
 
 /// Quintic fade 6t⁵ − 15t⁴ + 10t³ (Perlin 2002) and its derivative 30t⁴ − 60t³ + 30t².
@@ -55,21 +70,12 @@ pub fn noise_with_gradient(p: Vec3) -> Vec4 {
     let (u, du) = fade(f.x);
     let (v, dv) = fade(f.y);
     let (w, dw) = fade(f.z);
-    let a = perm(xi) + yi;
-    let (aa, ab) = (perm(a) + zi, perm(a + 1) + zi);
-    let b = perm(xi + 1) + yi;
-    let (ba, bb) = (perm(b) + zi, perm(b + 1) + zi);
-    // Gradients and offsets at the 8 corners.
-    let corners = [
-        (gradient(perm(aa)), f),
-        (gradient(perm(ba)), f - Vec3::new(1.0, 0.0, 0.0)),
-        (gradient(perm(ab)), f - Vec3::new(0.0, 1.0, 0.0)),
-        (gradient(perm(bb)), f - Vec3::new(1.0, 1.0, 0.0)),
-        (gradient(perm(aa + 1)), f - Vec3::new(0.0, 0.0, 1.0)),
-        (gradient(perm(ba + 1)), f - Vec3::new(1.0, 0.0, 1.0)),
-        (gradient(perm(ab + 1)), f - Vec3::new(0.0, 1.0, 1.0)),
-        (gradient(perm(bb + 1)), f - Vec3::new(1.0, 1.0, 1.0)),
-    ];
+    // Gradients and offsets at the 8 corners (corner i has offset bits x = i&1, y = i&2, z = i&4).
+    let corners: [(Vec3, Vec3); 8] = std::array::from_fn(|i| {
+        let (dx, dy, dz) = ((i & 1) as i32, ((i >> 1) & 1) as i32, ((i >> 2) & 1) as i32);
+        let g = gradient(lattice_hash(xi.wrapping_add(dx), yi.wrapping_add(dy), zi.wrapping_add(dz)));
+        (g, f - Vec3::new(dx as f32, dy as f32, dz as f32))
+    });
     let n: [f32; 8] = std::array::from_fn(|i| corners[i].0.dot(corners[i].1));
     // Trilinear blend written out as polynomial coefficients, so the gradient is exact:
     // value = k0 + k1 u + k2 v + k3 w + k4 uv + k5 vw + k6 wu + k7 uvw.
@@ -147,14 +153,40 @@ mod tests {
     }
 
     #[test]
-    fn the_table_is_a_permutation() {
-        let mut seen = [false; 256];
-        for &v in &PERMUTATION {
-            assert!(!seen[v as usize], "{v} appears twice");
-            seen[v as usize] = true;
+    fn gradients_are_perlins_twelve_edges() {
+        // The 2002 reference grad(h, x, y, z) as dot products, case by case.
+        let reference = |h: u32, p: Vec3| -> f32 {
+            let h = h & 15;
+            let u = if h < 8 { p.x } else { p.y };
+            let v = if h < 4 {
+                p.y
+            } else if h == 12 || h == 14 {
+                p.x
+            } else {
+                p.z
+            };
+            (if h & 1 == 0 { u } else { -u }) + (if h & 2 == 0 { v } else { -v })
+        };
+        let p = Vec3::new(0.3, -1.7, 2.9);
+        for h in 0..16 {
+            let g = gradient(h);
+            assert_eq!(g.dot(p), reference(h, p), "h = {h}");
+            assert_eq!(g.abs().element_sum(), 2.0, "h = {h}: a cube edge has two ±1 components");
         }
-        // Spot checks against Perlin's reference listing.
-        assert_eq!((PERMUTATION[0], PERMUTATION[160], PERMUTATION[255]), (151, 119, 180));
+    }
+
+    #[test]
+    fn the_hash_spreads_neighbouring_cells_over_all_gradients() {
+        let mut counts = [0u32; 16];
+        for x in -8..8 {
+            for y in -8..8 {
+                for z in -8..8 {
+                    counts[(lattice_hash(x, y, z) & 15) as usize] += 1;
+                }
+            }
+        }
+        // 4096 cells over 16 buckets: each near 256.
+        assert!(counts.iter().all(|&c| (200..=312).contains(&c)), "{counts:?}");
     }
 
     #[test]

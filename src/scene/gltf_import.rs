@@ -119,10 +119,13 @@ fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
             }
         }
     }
-    // gltf-json 1.4.1 validates an animation's samplers but not its channels' target nodes; gltf's
-    // Channel::target().node() then unwraps a missing node (also found by the fuzz target).
+    // gltf-json 1.4.1 validates an animation's samplers but not its channels' targets; gltf's
+    // Channel::target() then unwraps a missing node or an unknown path (both found by the fuzz target).
     for (a, animation) in root.animations.iter().enumerate() {
         for (c, channel) in animation.channels.iter().enumerate() {
+            if let gltf::json::validation::Checked::Invalid = channel.target.path {
+                bail!("not a valid glTF file: animation {a} channel {c} has an unknown target path");
+            }
             if channel.target.node.value() >= root.nodes.len() {
                 bail!(
                     "not a valid glTF file: animation {a} channel {c} targets node {} ({} nodes)",
