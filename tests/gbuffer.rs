@@ -266,3 +266,54 @@ fn degenerate_uvs_and_zero_area_triangles_give_no_nan_or_inf() {
     drop(pass);
     gpu.finish().unwrap();
 }
+
+#[test]
+fn normal_textures_tilt_the_normal_and_the_bump_composes_on_top() {
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
+    let gpu = common::GpuTest::new();
+    let pass = pass(&gpu);
+    // One texel: tangent-space (2·200/255 − 1, 2·128/255 − 1, 2·220/255 − 1), stored linear (it is data).
+    let texel = [200u8, 128, 220, 255];
+    let tangent_space = Vec3::new(texel[0] as f32, texel[1] as f32, texel[2] as f32) / 255.0 * 2.0 - Vec3::ONE;
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, Lens::PINHOLE);
+    for bump in [
+        None,
+        Some(BumpMap {
+            kind: NoiseKind::Sine,
+            amplitude: 0.03,
+            frequency: 1.0,
+            derivative: BumpDerivative::Analytic,
+            ..Default::default()
+        }),
+    ] {
+        let mut scene = scene_of(plane(Vec2::splat(2.0), Vec2::splat(2.0), None), Mat4::IDENTITY, bump, cam.clone());
+        scene.images = vec![TextureImage { name: "normal texel".into(), width: 1, height: 1, rgba8: texel.to_vec() }];
+        scene.textures =
+            vec![Texture { name: "normal map".into(), image: 0, sampler: Sampler::default(), srgb: false }];
+        scene.materials[0].normal_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
+        let frame = render(&gpu, &pass, &scene, (24, 24), Vec2::splat(0.5));
+        // plane(): Q_u along +X, Q_v along −Z, normal +Y, so T = +X and B = −Z.
+        let mapped = (Vec3::X * tangent_space.x - Vec3::Z * tangent_space.y + Vec3::Y * tangent_space.z).normalize();
+        let mut worst = 0.0f32;
+        for y in 0..24 {
+            for x in 0..24 {
+                if !frame.covered(x, y) {
+                    continue;
+                }
+                let want = match &bump {
+                    None => mapped,
+                    Some(b) => {
+                        let world = Vec3::from_slice(&frame.at(POSITION, x, y)[..3]);
+                        let uv = Vec2::new(world.x + 1.0, 1.0 - world.z);
+                        perturb_normal(mapped, Vec3::X, Vec3::NEG_Z, height_gradient(b, uv))
+                    }
+                };
+                let got = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
+                worst = worst.max((got - want).abs().max_element());
+            }
+        }
+        assert!(worst < 1e-3, "bump {}: worst normal component error {worst}", bump.is_some());
+    }
+    drop(pass);
+    gpu.finish().unwrap();
+}
