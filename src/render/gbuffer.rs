@@ -230,13 +230,7 @@ impl GBufferPass {
                 GBufferPush { clip_from_world: sample.clip_from_world(), view_z_row: sample.view_from_world.row(2) };
             unsafe {
                 device.raw.cmd_begin_rendering(cmd, &rendering);
-                let viewport = vk::Viewport::default()
-                    .width(extent.width as f32)
-                    .height(extent.height as f32)
-                    .min_depth(0.0)
-                    .max_depth(1.0);
-                device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
-                device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
+                crate::vk::commands::set_full_viewport(device, cmd, extent);
             }
             self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
             for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {

@@ -188,13 +188,8 @@ impl PreviewPass {
                     .layer_count(1)
                     .color_attachments(&color_attachment)
                     .depth_attachment(&depth_attachment);
-                unsafe {
-                    device.raw.cmd_begin_rendering(cmd, &rendering);
-                    let viewport =
-                        vk::Viewport::default().width(width as f32).height(height as f32).min_depth(0.0).max_depth(1.0);
-                    device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
-                    device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
-                }
+                unsafe { device.raw.cmd_begin_rendering(cmd, &rendering) };
+                crate::vk::commands::set_full_viewport(device, cmd, extent);
                 self.pipeline.bind(cmd, Some(&set), &[]);
                 let primitives = scene.instances.iter().flat_map(|i| gpu_scene.meshes[i.mesh].primitives.iter());
                 for (draw_index, primitive) in primitives.enumerate() {

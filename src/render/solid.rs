@@ -91,10 +91,7 @@ impl SolidPass {
                     .layer_count(1)
                     .color_attachments(&attachment);
                 device.raw.cmd_begin_rendering(cmd, &rendering);
-                let viewport =
-                    vk::Viewport::default().width(width as f32).height(height as f32).min_depth(0.0).max_depth(1.0);
-                device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
-                device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
+                crate::vk::commands::set_full_viewport(device, cmd, extent);
                 for (draw, buffer) in draws.iter().zip(&vertex_buffers) {
                     self.pipeline.bind(cmd, None, bytemuck::bytes_of(&draw.color));
                     device.raw.cmd_bind_vertex_buffers(cmd, 0, &[buffer.raw], &[0]);

@@ -235,25 +235,25 @@ fn apply(source: &Source<'_>, root: &FileRoot, scene: &mut Scene) -> Result<()> 
         if scene.node_motion.iter().any(|existing| existing.node == node) {
             return Err(source.error(m.node.span(), format!("node \"{name}\" already has a [[motion]] entry")));
         }
-        let motion = RigidMotion {
-            velocity: m
-                .velocity
-                .as_ref()
-                .map(|v| source.finite(v, "velocity"))
-                .transpose()?
-                .map(Vec3::from_array)
-                .unwrap_or_default(),
-            angular_velocity: m
-                .angular_velocity
-                .as_ref()
-                .map(|v| source.finite(v, "angular_velocity"))
-                .transpose()?
-                .map(Vec3::from_array)
-                .unwrap_or_default(),
-        };
+        let motion = rigid_motion(source, &m.velocity, &m.angular_velocity)?;
         scene.node_motion.push(NodeMotion { node, motion });
     }
     Ok(())
+}
+
+/// A constant linear and angular velocity from optional `velocity` and `angular_velocity` keys (zero if absent).
+fn rigid_motion(
+    source: &Source<'_>,
+    velocity: &Option<S<[f32; 3]>>,
+    angular_velocity: &Option<S<[f32; 3]>>,
+) -> Result<RigidMotion> {
+    let vector = |v: &Option<S<[f32; 3]>>, what: &str| -> Result<Vec3> {
+        Ok(v.as_ref().map(|v| source.finite(v, what)).transpose()?.map(Vec3::from_array).unwrap_or_default())
+    };
+    Ok(RigidMotion {
+        velocity: vector(velocity, "velocity")?,
+        angular_velocity: vector(angular_velocity, "angular_velocity")?,
+    })
 }
 
 fn list<'a>(names: impl Iterator<Item = &'a String>) -> String {
@@ -370,22 +370,7 @@ fn apply_camera(source: &Source<'_>, c: &CameraSection, scene: &mut Scene) -> Re
         }
         scene.shutter = (open, close);
     }
-    scene.camera_motion = RigidMotion {
-        velocity: c
-            .velocity
-            .as_ref()
-            .map(|v| source.finite(v, "velocity"))
-            .transpose()?
-            .map(Vec3::from_array)
-            .unwrap_or_default(),
-        angular_velocity: c
-            .angular_velocity
-            .as_ref()
-            .map(|v| source.finite(v, "angular_velocity"))
-            .transpose()?
-            .map(Vec3::from_array)
-            .unwrap_or_default(),
-    };
+    scene.camera_motion = rigid_motion(source, &c.velocity, &c.angular_velocity)?;
     scene.camera = Some(camera);
     Ok(())
 }

@@ -75,6 +75,16 @@ pub fn end_label(device: &Device, cmd: vk::CommandBuffer) {
     }
 }
 
+/// Sets the dynamic viewport (depth 0..1) and scissor to cover all of `extent`.
+pub fn set_full_viewport(device: &Device, cmd: vk::CommandBuffer, extent: vk::Extent2D) {
+    let viewport =
+        vk::Viewport::default().width(extent.width as f32).height(extent.height as f32).min_depth(0.0).max_depth(1.0);
+    unsafe {
+        device.raw.cmd_set_viewport(cmd, 0, &[viewport]);
+        device.raw.cmd_set_scissor(cmd, 0, &[extent.into()]);
+    }
+}
+
 /// Runs `record` inside a labelled region.
 pub fn labelled<R>(device: &Device, cmd: vk::CommandBuffer, label: &str, record: impl FnOnce() -> R) -> R {
     begin_label(device, cmd, label);
