@@ -3,3 +3,4 @@
 pub mod bump;
 pub mod lens;
 pub mod noise;
+pub mod sampling;
