@@ -108,9 +108,9 @@ pub fn sample_2d(kind: SamplerKind, seed: u32, pixel: u32, index: u32, count: u3
                 ((s / n) as f32 + unit_float(pcg_hash(h))) / n as f32,
             )
         }
-        SamplerKind::MultiJittered | SamplerKind::Sobol => {
+        SamplerKind::MultiJittered => {
             // Correlated multi-jittered (Kensler 2013, Listing 5): m×n strata with m·n ≥ count; each 1D
-            // projection is stratified into m·n intervals as well. (Sobol is not implemented yet: it uses CMJ.)
+            // projection is stratified into m·n intervals as well.
             let m = strata_per_side(count);
             let n = count.div_ceil(m);
             let s = permute(index % (m * n), m * n, k.wrapping_mul(0x5163_3e2d));

@@ -14,12 +14,10 @@ pub enum SamplerKind {
     Jittered,
     /// Correlated multi-jittered sampling (Kensler 2013).
     MultiJittered,
-    /// Owen-scrambled Sobol points.
-    Sobol,
 }
 
 impl SamplerKind {
-    pub const NAMES: [&'static str; 5] = ["regular", "random", "jittered", "multi-jittered", "sobol"];
+    pub const NAMES: [&'static str; 4] = ["regular", "random", "jittered", "multi-jittered"];
 
     pub fn parse(name: &str) -> Result<Self> {
         Ok(match name {
@@ -27,7 +25,6 @@ impl SamplerKind {
             "random" => Self::Random,
             "jittered" => Self::Jittered,
             "multi-jittered" => Self::MultiJittered,
-            "sobol" => Self::Sobol,
             other => bail!("unknown sampler \"{other}\" (one of: {})", Self::NAMES.join(", ")),
         })
     }
