@@ -52,13 +52,6 @@ pub fn load_scene(path: &Path) -> Result<scene::Scene> {
     Ok(load(path, &LoadOptions::default())?.scene)
 }
 
-/// What `render_preview` needs besides the scene.
-#[derive(Debug, Clone)]
-pub struct RenderOptions {
-    pub gpu: vk::GpuOptions,
-    pub preview: render::PreviewSettings,
-}
-
 /// Loads nothing, writes nothing: renders `scene` with the preview pass and returns the linear frame.
 pub fn render_preview(
     gpu: &vk::Gpu,

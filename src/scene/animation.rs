@@ -118,13 +118,6 @@ impl Channel {
 }
 
 impl Animation {
-    /// The time span its keys cover.
-    pub fn time_range(&self) -> (f32, f32) {
-        self.channels.iter().fold((f32::MAX, f32::MIN), |(lo, hi), c| {
-            (lo.min(c.times[0]), hi.max(*c.times.last().unwrap_or(&c.times[0])))
-        })
-    }
-
     /// Overwrites the animated properties of `locals` with their values at `t`.
     pub fn apply(&self, t: f32, locals: &mut [NodeTransform]) {
         for channel in &self.channels {

@@ -5,7 +5,7 @@ use super::camera::{look_at, Lens};
 use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
-use super::settings::{RenderSettings, SamplerKind, SettingsOverrides, ToneMap, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{SamplerKind, SettingsOverrides, ToneMap, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -615,9 +615,4 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         tone_map,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
-}
-
-/// The settings a scene file gives on top of the defaults (for callers that do not override anything).
-pub fn settings_of(file: &SceneFile) -> RenderSettings {
-    RenderSettings::default().with(&file.settings)
 }

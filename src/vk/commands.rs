@@ -150,12 +150,6 @@ impl Access {
         Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_STORAGE_READ };
     pub const COMPUTE_WRITE: Access =
         Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_STORAGE_WRITE };
-    pub const COMPUTE_READ_WRITE: Access = Access {
-        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
-        access: vk::AccessFlags2::from_raw(
-            vk::AccessFlags2::SHADER_STORAGE_READ.as_raw() | vk::AccessFlags2::SHADER_STORAGE_WRITE.as_raw(),
-        ),
-    };
     pub const AS_BUILD_WRITE: Access = Access {
         stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
         access: vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,

@@ -49,10 +49,6 @@ impl DescriptorSet {
         self.buffer(binding, vk::DescriptorType::STORAGE_BUFFER, buffer)
     }
 
-    pub fn uniform_buffer(&self, binding: u32, buffer: &Buffer) -> &Self {
-        self.buffer(binding, vk::DescriptorType::UNIFORM_BUFFER, buffer)
-    }
-
     fn buffer(&self, binding: u32, kind: vk::DescriptorType, buffer: &Buffer) -> &Self {
         let info = [vk::DescriptorBufferInfo::default().buffer(buffer.raw).offset(0).range(vk::WHOLE_SIZE)];
         let write = vk::WriteDescriptorSet::default()
