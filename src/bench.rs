@@ -2,8 +2,7 @@
 //! shared, noisy machine. GPU times come from timestamp queries around the pass alone.
 use crate::math::lens::camera_sample;
 use crate::render::gbuffer::{GBuffer, GBufferPass};
-use crate::render::textures::GpuTextures;
-use crate::render::GpuScene;
+use crate::render::SceneOnGpu;
 use crate::scene::{BumpDerivative, BumpMap, Scene};
 use crate::vk::commands::submit_and_wait;
 use crate::vk::timer::TimestampPool;
@@ -73,12 +72,12 @@ pub fn time_gbuffer(
 ) -> Result<GBufferFigure> {
     let device = &gpu.device;
     let scene = bump.apply(scene);
-    let gpu_scene = GpuScene::upload(device, &scene)?;
-    let textures = GpuTextures::upload(device, &scene)?;
+    let on_gpu = SceneOnGpu::upload(device, &scene)?;
+    let (gpu_scene, textures) = (&on_gpu.geometry, &on_gpu.textures);
     let pass = GBufferPass::new(device, textures.images.len() as u32)?;
     let gbuffer = GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
-    let inputs = pass.inputs(&scene, &gpu_scene, &textures, &transforms)?;
+    let inputs = pass.inputs(&scene, gpu_scene, textures, &transforms)?;
     let camera = scene.camera_at(scene.shutter.0);
     let timer = TimestampPool::new(device, "gbuffer bench timestamps", 2)?;
     let mut times = Vec::new();
@@ -89,7 +88,7 @@ pub fn time_gbuffer(
         timer.reset();
         submit_and_wait(device, "gbuffer bench sample", |cmd| {
             timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, 0);
-            pass.record(cmd, &gbuffer, &gpu_scene, &inputs, &sample);
+            pass.record(cmd, &gbuffer, gpu_scene, &inputs, &sample);
             timer.write(cmd, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, 1);
             Ok(())
         })?;

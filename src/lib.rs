@@ -52,16 +52,15 @@ pub fn load_scene(path: &Path) -> Result<scene::Scene> {
     Ok(load(path, &LoadOptions::default())?.scene)
 }
 
-/// Loads nothing, writes nothing: renders `scene` with the preview pass and returns the linear frame.
+/// Renders `scene` (already on the GPU as `on_gpu`) with the preview pass and returns the linear frame.
 pub fn render_preview(
     gpu: &vk::Gpu,
     scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
     settings: &render::PreviewSettings,
 ) -> Result<output::Frame> {
-    let gpu_scene = render::GpuScene::upload(&gpu.device, scene)?;
-    let textures = render::textures::GpuTextures::upload(&gpu.device, scene)?;
-    let pass = render::PreviewPass::new(&gpu.device, textures.images.len() as u32)?;
-    pass.render(scene, &gpu_scene, &textures, settings)
+    let pass = render::PreviewPass::new(&gpu.device, on_gpu.textures.images.len() as u32)?;
+    pass.render(scene, &on_gpu.geometry, &on_gpu.textures, settings)
 }
 
 /// Renders the G-buffer once (pinhole through the lens centre, no jitter, at the shutter's opening) and returns
@@ -69,20 +68,19 @@ pub fn render_preview(
 pub fn render_aovs(
     gpu: &vk::Gpu,
     scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
     width: u32,
     height: u32,
     aovs: &[render::aov::Aov],
 ) -> Result<Vec<(render::aov::Aov, output::Frame)>> {
     let device = &gpu.device;
-    let gpu_scene = render::GpuScene::upload(device, scene)?;
-    let textures = render::textures::GpuTextures::upload(device, scene)?;
-    let pass = render::gbuffer::GBufferPass::new(device, textures.images.len() as u32)?;
+    let pass = render::gbuffer::GBufferPass::new(device, on_gpu.textures.images.len() as u32)?;
     let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
-    let inputs = pass.inputs(scene, &gpu_scene, &textures, &transforms)?;
+    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &transforms)?;
     let mut camera = scene.camera_at(scene.shutter.0);
     camera.lens.aperture_radius = 0.0;
     let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO);
-    let frame = pass.render_to_host(&gbuffer, &gpu_scene, &inputs, &sample)?;
+    let frame = pass.render_to_host(&gbuffer, &on_gpu.geometry, &inputs, &sample)?;
     aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame)?))).collect()
 }

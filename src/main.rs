@@ -186,12 +186,16 @@ fn render(args: RenderArgs) -> Result<()> {
         height: settings.height,
         background: settings.background.to_array(),
     };
-    let frame = strata::render_preview(&gpu, &scene, &preview)?;
+    // Geometry and textures go up once for every pass of this render.
+    let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
+    let frame = strata::render_preview(&gpu, &scene, &on_gpu, &preview)?;
     let aovs = match &args.aov {
-        Some(list) => strata::render_aovs(&gpu, &scene, settings.width, settings.height, &list.0)?,
+        Some(list) => strata::render_aovs(&gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
         None => Vec::new(),
     };
     let device_name = gpu.device.report.name.clone();
+    // Everything holding the device goes first, so its teardown messages arrive before the check.
+    drop(on_gpu);
     drop(gpu);
     if args.gpu.validate {
         // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.

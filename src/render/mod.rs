@@ -10,4 +10,17 @@ pub mod solid;
 pub mod textures;
 
 pub use gpu_scene::GpuScene;
+
+/// Everything of a scene that lives on the GPU for a whole frame: geometry and textures. Upload it once and
+/// hand it to every pass.
+pub struct SceneOnGpu {
+    pub geometry: GpuScene,
+    pub textures: textures::GpuTextures,
+}
+
+impl SceneOnGpu {
+    pub fn upload(device: &std::sync::Arc<crate::vk::Device>, scene: &crate::scene::Scene) -> anyhow::Result<Self> {
+        Ok(Self { geometry: GpuScene::upload(device, scene)?, textures: textures::GpuTextures::upload(device, scene)? })
+    }
+}
 pub use preview::{PreviewPass, PreviewSettings};
