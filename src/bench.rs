@@ -77,7 +77,8 @@ pub fn time_gbuffer(
     let pass = GBufferPass::new(device, textures.images.len() as u32)?;
     let gbuffer = GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
-    let inputs = pass.inputs(&scene, gpu_scene, textures, &transforms)?;
+    let materials = pass.materials(&scene, textures)?;
+    let inputs = pass.inputs(&scene, gpu_scene, textures, &materials, &transforms)?;
     let camera = scene.camera_at(scene.shutter.0);
     let timer = TimestampPool::new(device, "gbuffer bench timestamps", 2)?;
     let mut times = Vec::new();

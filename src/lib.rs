@@ -77,7 +77,8 @@ pub fn render_aovs(
     let pass = render::gbuffer::GBufferPass::new(device, on_gpu.textures.images.len() as u32)?;
     let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
-    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &transforms)?;
+    let materials = pass.materials(scene, &on_gpu.textures)?;
+    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
     let mut camera = scene.camera_at(scene.shutter.0);
     camera.lens.aperture_radius = 0.0;
     let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO);

@@ -54,7 +54,8 @@ fn render(gpu: &common::GpuTest, pass: &GBufferPass, scene: &Scene, size: (u32, 
     assert_eq!(textures.images.len(), 1, "test scenes have no textures");
     let gbuffer = GBuffer::new(device, size.0, size.1).unwrap();
     let transforms: Vec<Mat4> = scene.instances.iter().map(|i| i.world_from_object).collect();
-    let inputs = pass.inputs(scene, &gpu_scene, &textures, &transforms).unwrap();
+    let materials = pass.materials(scene, &textures).unwrap();
+    let inputs = pass.inputs(scene, &gpu_scene, &textures, &materials, &transforms).unwrap();
     let sample = camera_sample(scene.camera.as_ref().unwrap(), size.0, size.1, lens_uv, Vec2::ZERO);
     pass.render_to_host(&gbuffer, &gpu_scene, &inputs, &sample).unwrap()
 }

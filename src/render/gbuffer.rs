@@ -66,11 +66,17 @@ impl GBufferFrame {
     }
 }
 
-/// The scene's draws and materials for one time, ready to record.
-pub struct GBufferInputs {
-    // Kept alive while the descriptor set refers to them.
+/// The scene's materials on the GPU: the same for every sample of a frame, so uploaded once.
+pub struct GBufferMaterials {
+    buffer: Buffer,
+}
+
+/// The draws for one sample's time, ready to record. Borrows the frame's materials, which its descriptor set
+/// refers to.
+pub struct GBufferInputs<'m> {
+    // Kept alive while the descriptor set refers to it.
     _draws: Buffer,
-    _materials: Buffer,
+    _materials: &'m GBufferMaterials,
     set: DescriptorSet,
     /// (mesh, primitive) per draw record, in draw order.
     order: Vec<(usize, usize)>,
@@ -130,14 +136,26 @@ impl GBufferPass {
         Ok(Self { pipeline, device: device.clone() })
     }
 
-    /// Draw records for `scene` with instance transforms `transforms` (one per instance, e.g. at a sample's time).
-    pub fn inputs(
+    /// Uploads `scene`'s materials (plus glTF's default material, last, for primitives without one). Once per
+    /// frame.
+    pub fn materials(&self, scene: &Scene, textures: &GpuTextures) -> Result<GBufferMaterials> {
+        let mut materials: Vec<GpuMaterial> =
+            scene.materials.iter().map(|m| GpuMaterial::new(m, textures.images.len())).collect();
+        materials.push(GpuMaterial::new(&Material::default(), textures.images.len()));
+        let buffer =
+            Buffer::with_data(&self.device, "gbuffer materials", &materials, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        Ok(GBufferMaterials { buffer })
+    }
+
+    /// Draw records for `scene` with instance transforms `transforms` (one per instance, at a sample's time).
+    pub fn inputs<'m>(
         &self,
         scene: &Scene,
         gpu_scene: &GpuScene,
         textures: &GpuTextures,
+        materials: &'m GBufferMaterials,
         transforms: &[Mat4],
-    ) -> Result<GBufferInputs> {
+    ) -> Result<GBufferInputs<'m>> {
         if transforms.len() != scene.instances.len() {
             bail!("{} transforms for {} instances", transforms.len(), scene.instances.len());
         }
@@ -154,18 +172,13 @@ impl GBufferPass {
         if records.is_empty() {
             records.push(bytemuck::Zeroable::zeroed());
         }
-        let mut materials: Vec<GpuMaterial> =
-            scene.materials.iter().map(|m| GpuMaterial::new(m, textures.images.len())).collect();
-        materials.push(GpuMaterial::new(&Material::default(), textures.images.len()));
-        let device = &self.device;
-        let draws = Buffer::with_data(device, "gbuffer draws", &records, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
-        let materials_buffer =
-            Buffer::with_data(device, "gbuffer materials", &materials, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let draws =
+            Buffer::with_data(&self.device, "gbuffer draws", &records, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
         let set = self.pipeline.new_descriptor_set("gbuffer set")?;
         set.storage_buffer(0, &draws)
-            .storage_buffer(1, &materials_buffer)
+            .storage_buffer(1, &materials.buffer)
             .combined_image_samplers(2, &textures.bindings());
-        Ok(GBufferInputs { _draws: draws, _materials: materials_buffer, set, order })
+        Ok(GBufferInputs { _draws: draws, _materials: materials, set, order })
     }
 
     /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
