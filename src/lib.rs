@@ -85,3 +85,17 @@ pub fn render_aovs(
     let frame = pass.render_to_host(&gbuffer, &on_gpu.geometry, &inputs, &sample)?;
     aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame)?))).collect()
 }
+
+/// Renders `scene` with distributed ray tracing: `settings.spp` samples of G-buffer + accumulation, then the
+/// resolve pass. `progress(done, total)` is called as samples finish; returning `false` stops the render with
+/// [`render::frame::Interrupted`].
+pub fn render(
+    gpu: &vk::Gpu,
+    scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
+    settings: &scene::settings::RenderSettings,
+    options: &render::frame::FrameOptions,
+    progress: &mut dyn FnMut(u32, u32) -> bool,
+) -> Result<render::frame::RenderedFrame> {
+    render::frame::render_frame(&gpu.device, scene, on_gpu, settings, options, progress)
+}

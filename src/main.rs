@@ -68,21 +68,62 @@ struct RenderArgs {
     /// The scene: a glTF 2.0 file (.gltf or .glb), or a scene file (.toml, see docs/scene-format.md) that names
     /// one and adds camera, lights, materials, motion and render settings.
     scene: PathBuf,
-    /// Output file, .png or .exr [default: the scene file's render.output].
+    /// Output file, .png (exposed, tone-mapped, 8-bit sRGB) or .exr (linear radiance, 32-bit float)
+    /// [default: the scene file's render.output].
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
+    /// Also write the linear radiance to this OpenEXR file (with the --aov layers, if any).
+    #[arg(long, value_name = "FILE")]
+    exr: Option<PathBuf>,
     /// Image size in pixels [default: the scene file's, else 960x540].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     size: Option<(u32, u32)>,
+    /// Samples per pixel: each is a G-buffer pass at its own lens point, shutter time and sub-pixel jitter plus
+    /// an accumulation pass [default: the scene file's, else 16].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    spp: Option<u32>,
+    /// How sample points are placed: regular (strata centres; aliases), random, jittered (one random point in
+    /// each of n x n strata, Cook 1984), multi-jittered (Kensler 2013) [default: the scene file's, else jittered].
+    #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
+    sampler: Option<strata::scene::settings::SamplerKind>,
+    /// Seed of every random choice; the same scene, options and seed give the same bits on the same device
+    /// [default: the scene file's, else 0].
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
+    /// Thin-lens aperture radius in metres; 0 is a pinhole (everything sharp) [default: the scene's camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative)]
+    aperture: Option<f32>,
+    /// Distance in metres of the plane in focus [default: the scene's camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative)]
+    focus: Option<f32>,
+    /// Shutter interval in seconds; motion during it blurs. OPEN:CLOSE with equal times is a still frame
+    /// [default: the scene file's, else 0:0].
+    #[arg(long, value_name = "OPEN:CLOSE", value_parser = parse_shutter)]
+    shutter: Option<(f32, f32)>,
+    /// Exposure in stops: the PNG's radiance is scaled by 2^EV before tone mapping [default: 0].
+    #[arg(long, value_name = "EV", allow_hyphen_values = true)]
+    exposure: Option<f32>,
+    /// Tone map for the PNG: clamp (none), or filmic (an ACES fit) [default: the scene file's, else filmic].
+    #[arg(long, value_name = "NAME", value_parser = parse_tone_map)]
+    tone_map: Option<strata::scene::settings::ToneMap>,
     /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
     /// 0.02,0.02,0.025].
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     background: Option<[f32; 3]>,
     /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
-    /// emission, material. With -o x.exr they are layers of the EXR (raw values); with -o x.png each is a PNG
+    /// emission, material. With an .exr they are layers of the EXR (raw values); with -o x.png each is a PNG
     /// beside it, x.<name>.png (normals as ½+½n, depth and height scaled to their range).
     #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
     aov: Option<AovList>,
+    /// Render the fast raster preview (one sample, simple shading, no ray queries) instead.
+    #[arg(long)]
+    preview: bool,
+    /// No progress bar and no summary line (errors and warnings still go to stderr).
+    #[arg(short, long)]
+    quiet: bool,
+    /// Print the summary as one JSON object on stdout (for scripts).
+    #[arg(long)]
+    json: bool,
     /// Let the glTF read files outside its own directory (absolute paths, ".."). Network URIs are never fetched.
     #[arg(long)]
     allow_any_uri: bool,
@@ -98,6 +139,39 @@ struct InfoArgs {
 }
 
 use strata::scene::settings::MAX_IMAGE_SIDE as MAX_SIDE;
+use strata::scene::settings::MAX_SPP;
+
+fn parse_sampler(text: &str) -> Result<strata::scene::settings::SamplerKind, String> {
+    strata::scene::settings::SamplerKind::parse(text).map_err(|e| e.to_string())
+}
+
+fn parse_tone_map(text: &str) -> Result<strata::scene::settings::ToneMap, String> {
+    strata::scene::settings::ToneMap::parse(text).map_err(|e| e.to_string())
+}
+
+fn parse_non_negative(text: &str) -> Result<f32, String> {
+    let v: f32 = text.trim().parse().map_err(|_| format!("\"{text}\" is not a number"))?;
+    if !v.is_finite() || v < 0.0 {
+        return Err(format!("{v} must be a finite number, 0 or more"));
+    }
+    Ok(v)
+}
+
+fn parse_shutter(text: &str) -> Result<(f32, f32), String> {
+    let (open, close) = text.split_once(':').ok_or_else(|| format!("\"{text}\" is not OPEN:CLOSE, e.g. 0:0.25"))?;
+    let time = |s: &str| -> Result<f32, String> {
+        let v: f32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a time in seconds"))?;
+        if !v.is_finite() {
+            return Err(format!("{v} is not a finite time"));
+        }
+        Ok(v)
+    };
+    let (open, close) = (time(open)?, time(close)?);
+    if close < open {
+        return Err(format!("the shutter closes ({close}) before it opens ({open})"));
+    }
+    Ok((open, close))
+}
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("\"{text}\" is not WIDTHxHEIGHT, e.g. 960x540"))?;
@@ -144,6 +218,10 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() => {
+            eprintln!("strata: interrupted; nothing was written");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -151,7 +229,24 @@ fn main() -> ExitCode {
     }
 }
 
+/// Set by Ctrl-C: the sample loop stops after the batch in flight; a second Ctrl-C exits at once (nothing has
+/// been written either way: outputs are written atomically at the end).
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn install_interrupt_handler() {
+    use std::sync::atomic::Ordering;
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            eprintln!("\nstrata: interrupted again; exiting without writing anything");
+            std::process::exit(130);
+        }
+    });
+}
+
 fn render(args: RenderArgs) -> Result<()> {
+    use std::io::IsTerminal as _;
+    use std::sync::atomic::Ordering;
+    install_interrupt_handler();
     let options = strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true) };
     let loaded = strata::load(&args.scene, &options)?;
     for warning in &loaded.scene.warnings {
@@ -160,20 +255,50 @@ fn render(args: RenderArgs) -> Result<()> {
     let cli = strata::scene::settings::SettingsOverrides {
         width: args.size.map(|s| s.0),
         height: args.size.map(|s| s.1),
+        spp: args.spp,
+        sampler: args.sampler,
+        seed: args.seed,
         background: args.background.map(glam::Vec3::from_array),
+        exposure: args.exposure,
+        tone_map: args.tone_map,
         output: args.output.clone(),
-        ..Default::default()
     };
+    if let Some(ev) = args.exposure {
+        if !ev.is_finite() || ev.abs() > 64.0 {
+            bail!("--exposure {ev}: give a number of stops between -64 and 64");
+        }
+    }
     // Defaults, then the scene file, then the command line.
     let settings = strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&cli);
     let output = settings
         .output
         .clone()
         .ok_or_else(|| anyhow!("no output file: pass -o FILE (or set output in the scene file's [render] table)"))?;
-    // Check the output name before any work, so a typo costs nothing.
+    // Check the output names before any work, so a typo costs nothing.
     strata::output::OutputFormat::from_path(&output)?;
     strata::output::check_output_directory(&output)?;
-    let scene = loaded.scene;
+    if let Some(exr) = &args.exr {
+        if strata::output::OutputFormat::from_path(exr)? != strata::output::OutputFormat::Exr {
+            bail!("--exr {}: the file name must end in .exr", exr.display());
+        }
+        strata::output::check_output_directory(exr)?;
+    }
+    let mut scene = loaded.scene;
+    if !args.preview && !scene.has_light() {
+        scene.add_default_light();
+        eprintln!(
+            "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
+             (add [[light]] tables in a scene file, see docs/scene-format.md)",
+            args.scene.display()
+        );
+    }
+    strata::scene::settings::CameraOverrides {
+        aperture_radius: args.aperture,
+        focus_distance: args.focus,
+        shutter: args.shutter,
+    }
+    .apply(&mut scene)
+    .with_context(|| format!("{}: applying the command line's camera options", args.scene.display()))?;
     let started = std::time::Instant::now();
     let gpu = Gpu::new(&GpuOptions {
         validation: args.gpu.validate,
@@ -181,14 +306,27 @@ fn render(args: RenderArgs) -> Result<()> {
         device: args.gpu.device.clone(),
     })?;
     let log = gpu.validation_log();
-    let preview = strata::render::PreviewSettings {
-        width: settings.width,
-        height: settings.height,
-        background: settings.background.to_array(),
-    };
     // Geometry and textures go up once for every pass of this render.
     let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
-    let frame = strata::render_preview(&gpu, &scene, &on_gpu, &preview)?;
+    let show_progress = !args.quiet && std::io::stderr().is_terminal();
+    let mut bar = ProgressBar::new(show_progress);
+    let picture = if args.preview {
+        let preview = strata::render::PreviewSettings {
+            width: settings.width,
+            height: settings.height,
+            background: settings.background.to_array(),
+        };
+        Picture::Preview(strata::render_preview(&gpu, &scene, &on_gpu, &preview)?)
+    } else {
+        let mut progress = |done: u32, total: u32| {
+            bar.update(done, total);
+            !INTERRUPTED.load(Ordering::SeqCst)
+        };
+        let frame_options = strata::render::frame::FrameOptions::default();
+        let rendered = strata::render(&gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
+        bar.finish();
+        Picture::Rendered(rendered?)
+    };
     let aovs = match &args.aov {
         Some(list) => strata::render_aovs(&gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
         None => Vec::new(),
@@ -201,17 +339,166 @@ fn render(args: RenderArgs) -> Result<()> {
         // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
-    write_outputs(&output, &frame, &aovs)?;
-    eprintln!(
-        "strata: wrote {} ({}x{}, {} triangles, {} instances) on {device_name} in {:.2} s",
-        output.display(),
-        frame.width,
-        frame.height,
-        scene.triangle_count(),
-        scene.instances.len(),
-        started.elapsed().as_secs_f64()
-    );
+    write_outputs(&output, &picture, &aovs)?;
+    if let Some(exr) = &args.exr {
+        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
+        strata::output::write_frame_with_layers(exr, picture.linear(), &layers)?;
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let mut written = vec![output.display().to_string()];
+    written.extend(args.exr.iter().map(|p| p.display().to_string()));
+    let summary = Summary {
+        written,
+        width: settings.width,
+        height: settings.height,
+        spp: if args.preview { 1 } else { settings.spp },
+        sampler: if args.preview { "preview" } else { sampler_name(settings.sampler) },
+        seed: settings.seed,
+        seconds,
+        stats: match &picture {
+            Picture::Rendered(r) => Some(r.stats.clone()),
+            Picture::Preview(_) => None,
+        },
+        device: device_name,
+        triangles: scene.triangle_count(),
+        instances: scene.instances.len(),
+    };
+    if args.json {
+        print_stdout(&format!("{}\n", summary.json()));
+    }
+    if !args.quiet {
+        eprintln!("{}", summary.line());
+    }
     Ok(())
+}
+
+fn sampler_name(kind: strata::scene::settings::SamplerKind) -> &'static str {
+    use strata::scene::settings::SamplerKind::*;
+    match kind {
+        Regular => "regular",
+        Random => "random",
+        Jittered => "jittered",
+        MultiJittered => "multi-jittered",
+    }
+}
+
+/// What a render produced: the distributed-ray-traced frame, or the raster preview.
+enum Picture {
+    Rendered(strata::render::frame::RenderedFrame),
+    Preview(strata::output::Frame),
+}
+
+impl Picture {
+    fn linear(&self) -> &strata::output::Frame {
+        match self {
+            Picture::Rendered(r) => &r.linear,
+            Picture::Preview(f) => f,
+        }
+    }
+}
+
+/// The end-of-render summary, as a line for people and JSON for scripts.
+struct Summary {
+    written: Vec<String>,
+    width: u32,
+    height: u32,
+    spp: u32,
+    sampler: &'static str,
+    seed: u64,
+    seconds: f64,
+    stats: Option<strata::render::frame::FrameStats>,
+    device: String,
+    triangles: usize,
+    instances: usize,
+}
+
+impl Summary {
+    fn rays(&self) -> (u64, u64) {
+        self.stats.as_ref().map(|s| (s.shadow_rays, s.secondary_rays)).unwrap_or((0, 0))
+    }
+
+    fn line(&self) -> String {
+        let (shadow, secondary) = self.rays();
+        let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
+        format!(
+            "strata: wrote {} ({}x{}, {} spp {}, {} triangles) on {} in {:.2} s: {:.2} samples/s, {:.2} M rays/s \
+             ({} shadow + {} secondary rays)",
+            self.written.join(" and "),
+            self.width,
+            self.height,
+            self.spp,
+            self.sampler,
+            self.triangles,
+            self.device,
+            self.seconds,
+            f64::from(self.spp) / render_seconds,
+            (shadow + secondary) as f64 / render_seconds / 1e6,
+            shadow,
+            secondary
+        )
+    }
+
+    fn json(&self) -> serde_json::Value {
+        let (shadow, secondary) = self.rays();
+        let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
+        serde_json::json!({
+            "outputs": self.written,
+            "width": self.width,
+            "height": self.height,
+            "spp": self.spp,
+            "sampler": self.sampler,
+            "seed": self.seed,
+            "seconds": self.seconds,
+            "render_seconds": render_seconds,
+            "samples_per_second": f64::from(self.spp) / render_seconds,
+            "shadow_rays": shadow,
+            "secondary_rays": secondary,
+            "rays_per_second": (shadow + secondary) as f64 / render_seconds,
+            "device": self.device,
+            "triangles": self.triangles,
+            "instances": self.instances,
+        })
+    }
+}
+
+/// A one-line progress bar on stderr: samples done of N, elapsed time and the estimate of what is left.
+struct ProgressBar {
+    enabled: bool,
+    started: std::time::Instant,
+    drawn: bool,
+}
+
+impl ProgressBar {
+    fn new(enabled: bool) -> Self {
+        let bar = Self { enabled, started: std::time::Instant::now(), drawn: false };
+        if enabled {
+            eprint!("\r[{}] 0 samples, starting ...", " ".repeat(30));
+        }
+        bar
+    }
+
+    fn update(&mut self, done: u32, total: u32) {
+        if !self.enabled || total == 0 {
+            return;
+        }
+        let elapsed = self.started.elapsed().as_secs_f64();
+        let fraction = f64::from(done) / f64::from(total);
+        let filled = (fraction * 30.0).round() as usize;
+        let eta = if done > 0 { elapsed / f64::from(done) * f64::from(total - done) } else { 0.0 };
+        eprint!(
+            "\r\x1b[2K[{}{}] {done}/{total} samples  {elapsed:.1} s elapsed  ETA {eta:.1} s",
+            "=".repeat(filled),
+            " ".repeat(30 - filled.min(30))
+        );
+        self.drawn = true;
+    }
+
+    fn finish(&mut self) {
+        if self.enabled {
+            eprint!("\r\x1b[2K");
+        }
+        self.drawn = false;
+    }
 }
 
 fn bench(args: BenchArgs) -> Result<()> {
@@ -272,15 +559,18 @@ fn bench(args: BenchArgs) -> Result<()> {
 /// The beauty image, then the AOVs: layers of an EXR, or PNGs beside a PNG.
 fn write_outputs(
     output: &std::path::Path,
-    frame: &strata::output::Frame,
+    picture: &Picture,
     aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
 ) -> Result<()> {
-    use strata::output::{write_data_png, write_frame, write_frame_with_layers, OutputFormat};
+    use strata::output::{write_data_png, write_frame, write_frame_with_layers, write_png_rgba8, OutputFormat};
     if OutputFormat::from_path(output)? == OutputFormat::Exr {
         let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        return write_frame_with_layers(output, frame, &layers);
+        return write_frame_with_layers(output, picture.linear(), &layers);
     }
-    write_frame(output, frame)?;
+    match picture {
+        Picture::Rendered(r) => write_png_rgba8(output, r.linear.width, r.linear.height, &r.display)?,
+        Picture::Preview(frame) => write_frame(output, frame)?,
+    }
     let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
     for (aov, raw) in aovs {
         let path = output.with_file_name(format!("{stem}.{}.png", aov.name()));

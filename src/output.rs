@@ -108,21 +108,26 @@ pub fn write_frame_with_layers(path: &Path, frame: &Frame, layers: &[(&str, &Fra
             if !layers.is_empty() {
                 bail!("{}: PNG cannot hold extra layers; write an .exr", path.display());
             }
-            let bytes = to_srgb8(frame);
-            write_atomic(path, |file| {
-                let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
-                image::ImageEncoder::write_image(
-                    encoder,
-                    &bytes,
-                    frame.width,
-                    frame.height,
-                    image::ExtendedColorType::Rgba8,
-                )
-                .context("encoding PNG")
-            })
+            write_png_rgba8(path, frame.width, frame.height, &to_srgb8(frame))
         }
         OutputFormat::Exr => write_atomic(path, |file| write_exr(file, frame, layers)),
     }
+}
+
+/// Writes 8-bit RGBA bytes that are already display-encoded (the resolve pass's sRGB output) as a PNG,
+/// atomically.
+pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    if OutputFormat::from_path(path)? != OutputFormat::Png {
+        bail!("{}: 8-bit display images are written as .png", path.display());
+    }
+    if rgba.len() != width as usize * height as usize * 4 {
+        bail!("{}: {} bytes is not a {width}x{height} RGBA image", path.display(), rgba.len());
+    }
+    write_atomic(path, |file| {
+        let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
+        image::ImageEncoder::write_image(encoder, rgba, width, height, image::ExtendedColorType::Rgba8)
+            .context("encoding PNG")
+    })
 }
 
 /// One EXR part: the beauty as `R,G,B,A`, each extra layer as `name.R, name.G, name.B, name.A` (the OpenEXR

@@ -50,6 +50,7 @@ fn box_renders_where_its_geometry_projects_with_the_expected_shading() {
         &format!("{width}x{height}"),
         "--background",
         "0,0,1",
+        "--preview",
         "--validate",
     ]);
     assert!(out.status.success(), "render failed:\n{}", stderr(&out));
@@ -111,7 +112,15 @@ fn exr_output_holds_linear_radiance() {
     let dir = temp_dir("exr");
     let exr_path = dir.join("box.exr");
     let scene_path = samples().join("Box.gltf");
-    let out = strata(&["render", scene_path.to_str().unwrap(), "-o", exr_path.to_str().unwrap(), "--size", "64x48"]);
+    let out = strata(&[
+        "render",
+        scene_path.to_str().unwrap(),
+        "-o",
+        exr_path.to_str().unwrap(),
+        "--size",
+        "64x48",
+        "--preview",
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let image = exr::prelude::read_first_rgba_layer_from_file(
         &exr_path,

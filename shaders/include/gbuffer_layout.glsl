@@ -24,7 +24,7 @@ struct GBufferDraw {
 
 struct GpuMaterial {
     vec4 base_color;
-    vec4 emissive;
+    vec4 emissive;           // rgb emitted radiance, w specular factor (KHR_materials_specular)
     float metallic;
     float roughness;
     float transmission;
@@ -41,6 +41,7 @@ struct GpuMaterial {
     Bump bump;               // kind BUMP_NONE: no bump
 };
 
+#ifndef GBUFFER_LAYOUT_STRUCTS_ONLY
 layout(set = 0, binding = 0, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
 layout(set = 0, binding = 1, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };
 
@@ -49,4 +50,5 @@ layout(push_constant, std430) uniform GBufferPush {
     // Third row of view_from_world: view depth = -dot(view_z_row, vec4(p, 1)).
     vec4 view_z_row;
 } pc;
+#endif
 #endif

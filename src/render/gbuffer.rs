@@ -68,7 +68,7 @@ impl GBufferFrame {
 
 /// The scene's materials on the GPU: the same for every sample of a frame, so uploaded once.
 pub struct GBufferMaterials {
-    buffer: Buffer,
+    pub(crate) buffer: Buffer,
 }
 
 /// The draws for one sample's time, ready to record. Borrows the frame's materials, which its descriptor set
@@ -182,7 +182,8 @@ impl GBufferPass {
     }
 
     /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
-    /// (written by `COLOR_ATTACHMENT_OUTPUT`) for the caller's next barrier.
+    /// (written by `COLOR_ATTACHMENT_OUTPUT`) for the caller's next barrier. `last_read` is how the colour
+    /// images were last read (`Access::NONE` on their first use); their old contents are discarded.
     pub fn record(
         &self,
         cmd: vk::CommandBuffer,
@@ -190,6 +191,7 @@ impl GBufferPass {
         gpu_scene: &GpuScene,
         inputs: &GBufferInputs,
         sample: &CameraSample,
+        last_read: Access,
     ) {
         let device = &self.device;
         for image in &gbuffer.color {
@@ -197,15 +199,17 @@ impl GBufferPass {
                 device,
                 cmd,
                 image,
-                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::UNDEFINED, last_read),
                 (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
             );
         }
+        // The previous pass's depth writes (if any) finish before this one clears.
+        let depth_before = if last_read == Access::NONE { Access::NONE } else { Access::DEPTH_ATTACHMENT };
         image_barrier(
             device,
             cmd,
             &gbuffer.depth,
-            (vk::ImageLayout::UNDEFINED, Access::NONE),
+            (vk::ImageLayout::UNDEFINED, depth_before),
             (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, Access::DEPTH_ATTACHMENT),
         );
         labelled(device, cmd, "gbuffer pass", || {
@@ -277,7 +281,7 @@ impl GBufferPass {
     ) -> Result<GBufferFrame> {
         let device = &self.device;
         submit_and_wait(device, "gbuffer frame", |cmd| {
-            self.record(cmd, gbuffer, gpu_scene, inputs, sample);
+            self.record(cmd, gbuffer, gpu_scene, inputs, sample, Access::NONE);
             Ok(())
         })?;
         let mut channels = Vec::new();

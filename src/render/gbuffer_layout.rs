@@ -120,6 +120,7 @@ impl GpuBump {
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
     pub base_color: Vec4,
+    /// rgb: emitted radiance; w: specular factor.
     pub emissive: Vec4,
     pub metallic: f32,
     pub roughness: f32,
@@ -150,7 +151,7 @@ impl GpuMaterial {
         };
         Self {
             base_color: m.base_color,
-            emissive: m.emissive.extend(0.0),
+            emissive: m.emissive.extend(m.specular),
             metallic: m.metallic,
             roughness: m.roughness,
             transmission: m.transmission,

@@ -49,21 +49,14 @@ impl GpuScene {
                     vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | BUILD_INPUT_USAGE,
                     16,
                 )?;
-                let normals = Buffer::device_local_with_data(
-                    device,
-                    &format!("{name} normals"),
-                    &p.normals,
-                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-                    16,
-                )?;
+                // Normals and UVs are also read by address where rays hit (render::ray_scene).
+                let by_address = vk::BufferUsageFlags::VERTEX_BUFFER
+                    | vk::BufferUsageFlags::STORAGE_BUFFER
+                    | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+                let normals =
+                    Buffer::device_local_with_data(device, &format!("{name} normals"), &p.normals, by_address, 16)?;
                 let uv_data = if p.uvs.is_empty() { vec![glam::Vec2::ZERO; p.positions.len()] } else { p.uvs.clone() };
-                let uvs = Buffer::device_local_with_data(
-                    device,
-                    &format!("{name} uvs"),
-                    &uv_data,
-                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-                    16,
-                )?;
+                let uvs = Buffer::device_local_with_data(device, &format!("{name} uvs"), &uv_data, by_address, 16)?;
                 let color_data =
                     if p.colors.is_empty() { vec![glam::Vec4::ONE; p.positions.len()] } else { p.colors.clone() };
                 let colors = Buffer::device_local_with_data(

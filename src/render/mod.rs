@@ -1,11 +1,17 @@
 //! The frame: joins the CPU scene to Vulkan. Each pass owns its pipeline and records into a command buffer.
+pub mod accumulate;
+pub mod accumulate_layout;
 pub mod aov;
+pub mod frame;
 pub mod gbuffer;
 pub mod gbuffer_layout;
 pub mod gpu_scene;
+pub mod lights;
 pub mod noise_probe;
 pub mod preview;
 pub mod ray_probe;
+pub mod ray_scene;
+pub mod resolve;
 pub mod solid;
 pub mod textures;
 

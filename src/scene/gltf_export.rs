@@ -87,6 +87,9 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
         if m.ior != 1.5 {
             extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
         }
+        if m.specular != 1.0 {
+            extensions.insert("KHR_materials_specular".into(), json!({"specularFactor": m.specular}));
+        }
         if m.double_sided {
             material["doubleSided"] = json!(true);
         }
@@ -95,6 +98,7 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
                 extensions_used.push(match name.as_str() {
                     "KHR_materials_emissive_strength" => "KHR_materials_emissive_strength",
                     "KHR_materials_transmission" => "KHR_materials_transmission",
+                    "KHR_materials_specular" => "KHR_materials_specular",
                     _ => "KHR_materials_ior",
                 });
             }

@@ -12,10 +12,11 @@ use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 5] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 6] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
+    "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_texture_transform",
 ];
@@ -336,6 +337,8 @@ fn material(m: gltf::Material<'_>) -> Material {
         transmission: m.transmission().map(|t| t.transmission_factor()).unwrap_or(0.0),
         transmission_texture: m.transmission().and_then(|t| t.transmission_texture()).as_ref().map(texture_ref),
         ior: m.ior().unwrap_or(defaults.ior),
+        // Only the factor: the specular texture and colour are not read.
+        specular: m.specular().map(|s| s.specular_factor()).unwrap_or(defaults.specular),
         bump: None,
     }
 }

@@ -166,6 +166,8 @@ pub struct Material {
     pub transmission_texture: Option<TextureRef>,
     /// `KHR_materials_ior` (default 1.5).
     pub ior: f32,
+    /// `KHR_materials_specular` factor: scales the dielectric Fresnel reflection (0: a purely diffuse surface).
+    pub specular: f32,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
 }
@@ -191,6 +193,7 @@ impl Default for Material {
             transmission: 0.0,
             transmission_texture: None,
             ior: 1.5,
+            specular: 1.0,
             bump: None,
         }
     }

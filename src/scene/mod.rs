@@ -186,6 +186,30 @@ impl Scene {
         world
     }
 
+    /// Whether anything in the scene gives light: a light, or an emissive material.
+    pub fn has_light(&self) -> bool {
+        !self.lights.is_empty() || self.materials.iter().any(|m| m.emissive.max_element() > 0.0)
+    }
+
+    /// Adds a directional key light from above and behind the camera's left shoulder (irradiance π, so a white
+    /// Lambertian surface facing it reflects radiance 1): what a scene with no light of its own is lit by.
+    pub fn add_default_light(&mut self) {
+        let camera = self.camera_or_default();
+        let direction = camera.world_from_camera.transform_vector3(Vec3::new(-0.4, 1.0, 0.8)).normalize();
+        self.lights.push(Light {
+            name: "default key light".into(),
+            shape: LightShape::Directional,
+            emission: Vec3::splat(std::f32::consts::PI),
+            world_from_light: camera::look_at(
+                Vec3::ZERO,
+                -direction,
+                if direction.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y },
+            ),
+            node: None,
+            range: 0.0,
+        });
+    }
+
     /// The camera at time `t` (its scene-file motion applied).
     pub fn camera_at(&self, t: f32) -> Camera {
         let mut camera = self.camera_or_default();

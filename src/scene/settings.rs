@@ -115,3 +115,50 @@ impl RenderSettings {
         self
     }
 }
+
+/// Lens and shutter settings from the command line, applied to the scene's camera on top of the scene file.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CameraOverrides {
+    /// Thin-lens aperture radius in metres (0: pinhole).
+    pub aperture_radius: Option<f32>,
+    /// Distance of the plane in focus, in metres.
+    pub focus_distance: Option<f32>,
+    /// Shutter open and close times in seconds.
+    pub shutter: Option<(f32, f32)>,
+}
+
+impl CameraOverrides {
+    pub fn apply(&self, scene: &mut super::Scene) -> Result<()> {
+        if let Some(a) = self.aperture_radius {
+            if !a.is_finite() || a < 0.0 {
+                bail!("aperture radius {a} must be a finite number of metres, 0 or more");
+            }
+        }
+        if let Some(f) = self.focus_distance {
+            if !f.is_finite() || f <= 0.0 {
+                bail!("focus distance {f} must be a positive number of metres");
+            }
+        }
+        if let Some((open, close)) = self.shutter {
+            if !open.is_finite() || !close.is_finite() || close < open {
+                bail!("shutter {open}:{close} must be two finite times with open <= close");
+            }
+            scene.shutter = (open, close);
+        }
+        if self.aperture_radius.is_some() || self.focus_distance.is_some() {
+            let mut camera = scene.camera_or_default();
+            if let Some(a) = self.aperture_radius {
+                camera.lens.aperture_radius = a;
+            }
+            if let Some(f) = self.focus_distance {
+                camera.lens.focus_distance = f;
+            }
+            if camera.lens.aperture_radius > 0.0 && !matches!(camera.projection, super::Projection::Perspective { .. })
+            {
+                bail!("a lens aperture needs a perspective camera; this scene's camera is orthographic");
+            }
+            scene.camera = Some(camera);
+        }
+        Ok(())
+    }
+}

@@ -120,7 +120,7 @@ impl AccelerationStructure {
         Self::build(device, name, vk::AccelerationStructureTypeKHR::TOP_LEVEL, &geometry, &[records.len() as u32])
     }
 
-    fn build(
+    pub(crate) fn build(
         device: &Arc<Device>,
         name: &str,
         kind: vk::AccelerationStructureTypeKHR,
@@ -195,5 +195,144 @@ impl AccelerationStructure {
         })?;
         drop(scratch);
         Ok(structure)
+    }
+}
+
+/// A TLAS rebuilt many times over the same instances at different transforms (one rebuild per sample time in
+/// the sample loop): its storage and scratch are allocated once for `instance_count` instances, and a
+/// host-visible instance buffer holds `slots` sets of records, so several builds can be recorded into one
+/// submission, each from its own slot.
+pub struct DynamicTlas {
+    pub structure: AccelerationStructure,
+    scratch: Buffer,
+    instances: Buffer,
+    instance_count: u32,
+    slots: u32,
+    device: Arc<Device>,
+}
+
+const INSTANCE_RECORD_SIZE: u64 = std::mem::size_of::<InstanceRecord>() as u64;
+
+impl DynamicTlas {
+    pub fn new(device: &Arc<Device>, name: &str, instance_count: u32, slots: u32) -> Result<Self> {
+        let slots = slots.max(1);
+        let records = u64::from(instance_count.max(1)) * u64::from(slots);
+        // Instance data must be 16-byte aligned (VUID-vkCmdBuildAccelerationStructuresKHR-pInfos-03715).
+        let instances = Buffer::new(
+            device,
+            &format!("{name} instances"),
+            records * INSTANCE_RECORD_SIZE,
+            BUILD_INPUT_USAGE,
+            MemoryLocation::CpuToGpu,
+            16,
+        )?;
+        let geometry = [Self::geometry(instances.address)];
+        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(&geometry);
+        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+        unsafe {
+            device.accel.get_acceleration_structure_build_sizes(
+                vk::AccelerationStructureBuildTypeKHR::DEVICE,
+                &build_info,
+                &[instance_count],
+                &mut sizes,
+            )
+        };
+        let storage = Buffer::new(
+            device,
+            &format!("{name} storage"),
+            sizes.acceleration_structure_size,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+            256,
+        )?;
+        let create_info = vk::AccelerationStructureCreateInfoKHR::default()
+            .buffer(storage.raw)
+            .size(sizes.acceleration_structure_size)
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL);
+        let raw = unsafe { device.accel.create_acceleration_structure(&create_info, None) }
+            .with_context(|| format!("vkCreateAccelerationStructureKHR \"{name}\""))?;
+        device.set_name(raw, name);
+        let address = unsafe {
+            device.accel.get_acceleration_structure_device_address(
+                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
+            )
+        };
+        let structure =
+            AccelerationStructure { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() };
+        let scratch = Buffer::new(
+            device,
+            &format!("{name} scratch"),
+            sizes.build_scratch_size.max(1),
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+            device.limits.min_scratch_offset_alignment,
+        )?;
+        Ok(Self { structure, scratch, instances, instance_count, slots, device: device.clone() })
+    }
+
+    fn geometry(address: vk::DeviceAddress) -> vk::AccelerationStructureGeometryKHR<'static> {
+        let instances_data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
+            .array_of_pointers(false)
+            .data(vk::DeviceOrHostAddressConstKHR { device_address: address });
+        vk::AccelerationStructureGeometryKHR::default()
+            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+            .geometry(vk::AccelerationStructureGeometryDataKHR { instances: instances_data })
+    }
+
+    /// Writes the instances of `slot` (the GPU must not be reading that slot).
+    pub fn write_slot(&mut self, slot: u32, instances: &[TlasInstance<'_>]) -> Result<()> {
+        if slot >= self.slots || instances.len() != self.instance_count as usize {
+            bail!(
+                "TLAS \"{}\": slot {slot} with {} instances (has {} slots of {})",
+                self.structure.name,
+                instances.len(),
+                self.slots,
+                self.instance_count
+            );
+        }
+        let records = instances.iter().map(instance_record).collect::<Result<Vec<_>>>()?;
+        let offset = u64::from(slot) * u64::from(self.instance_count.max(1)) * INSTANCE_RECORD_SIZE;
+        self.instances.write(offset, bytemuck::cast_slice(&records))
+    }
+
+    /// Records a full rebuild from `slot`'s instances, then a barrier that makes the result visible to ray
+    /// queries in compute shaders. The caller orders it after earlier readers of the TLAS.
+    pub fn record_build(&self, cmd: vk::CommandBuffer, slot: u32) {
+        let offset = u64::from(slot) * u64::from(self.instance_count.max(1)) * INSTANCE_RECORD_SIZE;
+        let geometry = [Self::geometry(self.instances.address + offset)];
+        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .geometries(&geometry)
+            .dst_acceleration_structure(self.structure.raw)
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: self.scratch.address });
+        let ranges = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(self.instance_count)];
+        let device = &self.device;
+        // The previous build (scratch and structure writes) and the ray queries that read its result must be
+        // done before this one overwrites both.
+        let before = Access {
+            stage: vk::PipelineStageFlags2::from_raw(
+                Access::AS_BUILD_WRITE.stage.as_raw() | Access::AS_COMPUTE_READ.stage.as_raw(),
+            ),
+            access: vk::AccessFlags2::from_raw(
+                vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
+                    | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
+            ),
+        };
+        let build = Access {
+            stage: Access::AS_BUILD_WRITE.stage,
+            access: vk::AccessFlags2::from_raw(
+                vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
+                    | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
+            ),
+        };
+        memory_barrier(device, cmd, before, build);
+        unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[build_info], &[&ranges]) };
+        memory_barrier(device, cmd, Access::AS_BUILD_WRITE, Access::AS_COMPUTE_READ);
     }
 }

@@ -94,7 +94,7 @@ pub fn labelled<R>(device: &Device, cmd: vk::CommandBuffer, label: &str, record:
 }
 
 /// One access scope: the stages and accesses on one side of a barrier.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Access {
     pub stage: vk::PipelineStageFlags2,
     pub access: vk::AccessFlags2,
@@ -148,6 +148,13 @@ impl Access {
     };
     pub const COMPUTE_READ: Access =
         Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_STORAGE_READ };
+    /// Storage images and buffers that compute shaders both read and write (accumulation).
+    pub const COMPUTE_READ_WRITE: Access = Access {
+        stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
+        access: vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::SHADER_STORAGE_READ.as_raw() | vk::AccessFlags2::SHADER_STORAGE_WRITE.as_raw(),
+        ),
+    };
     pub const COMPUTE_WRITE: Access =
         Access { stage: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::SHADER_STORAGE_WRITE };
     pub const AS_BUILD_WRITE: Access = Access {

@@ -1,0 +1,300 @@
+#version 460
+// The accumulation pass: distributed ray tracing (Cook, Porter and Carpenter 1984) on top of one G-buffer
+// sample. Per pixel: emission, direct light from one light sample chosen by power with a shadow ray query
+// (soft shadows), then a specular chain of up to max_depth vertices whose directions are perturbed around the
+// ideal reflection or refraction by GGX (gloss, translucency), each with its own direct light. The sample's
+// radiance is added into the RGBA32F accumulation image (alpha: coverage).
+#extension GL_EXT_ray_query : require
+#extension GL_EXT_scalar_block_layout : require
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_nonuniform_qualifier : require
+#define GBUFFER_LAYOUT_STRUCTS_ONLY
+#include "gbuffer_layout.glsl"
+#include "accumulate_layout.glsl"
+#include "sampling.glsl"
+#include "brdf.glsl"
+#include "lights.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
+// position, shading normal, geometric normal, albedo, material, emission (gbuffer_layout.glsl).
+layout(set = 0, binding = 1) uniform sampler2D gbuffer[6];
+layout(set = 0, binding = 2) uniform usampler2D gbuffer_ids;
+layout(set = 0, binding = 3, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLight lights[]; };
+layout(set = 0, binding = 6, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
+layout(set = 0, binding = 7) uniform sampler2D textures[];
+layout(set = 0, binding = 8, std430) buffer Counters { uint counters[]; };
+
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec3Array { vec3 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
+
+// Sampler dimensions (DESIGN.md: pixel, time, lens, light, then bounces); 0-2 are the camera's, on the host.
+const uint DIM_FIRST_VERTEX = 3u;
+const uint DIMS_PER_VERTEX = 5u;  // light pick, light point (2D), lobe choice, lobe direction (2D)
+
+shared uint group_shadow_rays;
+shared uint group_secondary_rays;
+
+struct Surface {
+    float emitter_density;  // π · luminance · sides of an emitter that light sampling covers, else 0
+    vec3 position;
+    vec3 normal;     // shading normal, on the side of the incoming ray
+    vec3 geometric;  // face normal, same side
+    vec3 emission;
+    bool inside;     // the incoming ray travels inside the material
+    Shading m;
+};
+
+vec2 sample2(uint pixel, uint dim) {
+    return sample_2d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+}
+
+float sample1(uint pixel, uint dim) {
+    return sample_1d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+}
+
+// A ray origin just off the surface on the side the ray leaves towards (scaled to the position's magnitude).
+vec3 offset_origin(vec3 p, vec3 ng, vec3 dir) {
+    float eps = 1e-4 * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    return p + ng * (dot(ng, dir) >= 0.0 ? eps : -eps);
+}
+
+bool occluded(vec3 o, vec3 d, float t_max) {
+    if (t_max <= 0.0) return false;
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, o, 0.0, d, t_max);
+    while (rayQueryProceedEXT(q)) {}
+    return rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionNoneEXT;
+}
+
+uint pick_light(float u) {
+    uint lo = 0u;
+    uint hi = pc.light_count - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (u < lights[pc.light_offset + mid].emission.w) hi = mid; else lo = mid + 1u;
+    }
+    return pc.light_offset + lo;
+}
+
+// One light sample: the light picked by power, a point on it, its shadow ray. The diffuse lobe takes it whole;
+// the specular lobe shares it with the gloss rays by the power heuristic.
+vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_rays) {
+    if (pc.light_count == 0u) return vec3(0.0);
+    GpuLight l = lights[pick_light(sample1(pixel, dim))];
+    float p = l.cone.w;
+    if (!(p > 0.0)) return vec3(0.0);
+    LightSample ls = sample_light(l, s.position, sample2(pixel, dim + 1u));
+    if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
+    vec3 diffuse;
+    vec3 specular;
+    brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);
+    if (!ls.delta) specular *= power_heuristic(p * ls.pdf, specular_pdf(s.m, s.normal, v, ls.dir));
+    vec3 f = diffuse + specular;
+    if (f == vec3(0.0)) return vec3(0.0);
+    shadow_rays++;
+    vec3 o = offset_origin(s.position, s.geometric, ls.dir);
+    // Stop short of the light: emissive triangles are geometry and must not shadow themselves.
+    float t_max = min(ls.dist * (1.0 - 1e-4) - 1e-4 * (1.0 + ls.dist), 1e30);
+    if (occluded(o, ls.dir, t_max)) return vec3(0.0);
+    return f * ls.value / p;
+}
+
+Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
+    Surface s;
+    vec4 pos = texelFetch(gbuffer[0], p, 0);
+    vec4 mat = texelFetch(gbuffer[4], p, 0);
+    s.position = pos.xyz;
+    s.normal = normalize(texelFetch(gbuffer[1], p, 0).xyz);
+    s.geometric = normalize(texelFetch(gbuffer[2], p, 0).xyz);
+    s.emission = texelFetch(gbuffer[5], p, 0).rgb;
+    s.emitter_density = 0.0;
+    s.m.albedo = texelFetch(gbuffer[3], p, 0).rgb;
+    s.m.metallic = mat.x;
+    s.m.roughness = mat.y;
+    s.m.transmission = mat.z;
+    s.m.ior = 1.0 + 3.0 * mat.w;
+    s.m.specular = materials[material].emissive.w;
+    s.inside = dot(s.geometric, v) < 0.0;
+    if (s.inside) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
+    }
+    return s;
+}
+
+vec2 transform_uv(vec4 rows[2], vec2 uv) {
+    vec3 h = vec3(uv, 1.0);
+    return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
+}
+
+// The surface a ray query committed to, from the primitive's vertex streams (interpolated normal, base colour
+// texture, emission; no bump: bump mapping lives in the G-buffer).
+Surface hit_surface(rayQueryEXT q, vec3 v) {
+    int record = rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true);
+    uint tri = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true));
+    vec2 bc = rayQueryGetIntersectionBarycentricsEXT(q, true);
+    mat4x3 world_from_object = rayQueryGetIntersectionObjectToWorldEXT(q, true);
+    GpuPrimitiveRecord r = primitives[record];
+    UintArray indices = UintArray(r.indices);
+    uint i0 = indices.v[3u * tri];
+    uint i1 = indices.v[3u * tri + 1u];
+    uint i2 = indices.v[3u * tri + 2u];
+    vec3 w = vec3(1.0 - bc.x - bc.y, bc.x, bc.y);
+    Vec3Array positions = Vec3Array(r.positions);
+    vec3 p0 = positions.v[i0];
+    vec3 p1 = positions.v[i1];
+    vec3 p2 = positions.v[i2];
+    Vec3Array normals = Vec3Array(r.normals);
+    vec3 n_object = w.x * normals.v[i0] + w.y * normals.v[i1] + w.z * normals.v[i2];
+    Vec2Array uvs = Vec2Array(r.uvs);
+    vec2 uv = w.x * uvs.v[i0] + w.y * uvs.v[i1] + w.z * uvs.v[i2];
+
+    mat3 m3 = mat3(world_from_object);
+    // Normals transform by the cofactor matrix (det · inverse transpose); the sign keeps mirrored instances right.
+    mat3 cofactor = mat3(cross(m3[1], m3[2]), cross(m3[2], m3[0]), cross(m3[0], m3[1]));
+    float det_sign = dot(m3[0], cross(m3[1], m3[2])) < 0.0 ? -1.0 : 1.0;
+    Surface s;
+    s.position = world_from_object * vec4(w.x * p0 + w.y * p1 + w.z * p2, 1.0);
+    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));
+    s.geometric = normalize(ng);
+    vec3 ns = det_sign * (cofactor * n_object);
+    s.normal = dot(ns, ns) > 0.0 ? normalize(ns) : s.geometric;
+    if (dot(s.normal, s.geometric) < 0.0) s.geometric = -s.geometric;
+
+    GpuMaterial m = materials[r.material];
+    vec4 base = m.base_color;
+    if (m.base_color_texture >= 0) {
+        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0);
+    }
+    s.emission = m.emissive.rgb;
+    if (m.emissive_texture >= 0) s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], uv, 0.0).rgb;
+    s.m.albedo = base.rgb;
+    s.m.metallic = m.metallic;
+    s.m.roughness = m.roughness;
+    s.m.transmission = m.transmission;
+    s.m.ior = m.ior;
+    s.m.specular = m.emissive.w;
+    s.inside = dot(s.geometric, v) < 0.0;
+    if (s.inside) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
+    }
+    // Matches render/lights.rs: uniform-emission surfaces are lights, one-sided ones only from the front.
+    bool sampled = m.emissive_texture < 0 && luminance(m.emissive.rgb) > 0.0 && (m.double_sided != 0 || !s.inside);
+    s.emitter_density = sampled ? PI * luminance(m.emissive.rgb) * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
+    return s;
+}
+
+// The nearest non-geometry light along a ray, if nearer than t_max: its radiance, and in `density` the
+// solid-angle density with which light sampling would have chosen that direction.
+vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
+    vec3 result = vec3(0.0);
+    density = 0.0;
+    float nearest = t_max;
+    for (uint i = 0u; i < pc.analytic_light_count; i++) {
+        vec3 radiance;
+        GpuLight l = lights[pc.light_offset + i];
+        float t = intersect_light(l, o, d, nearest, radiance);
+        if (t > 0.0) {
+            nearest = t;
+            result = radiance;
+            density = l.cone.w * light_pdf(l, o, d, t);
+        }
+    }
+    return result;
+}
+
+vec3 shade(Surface s, vec3 v, uint pixel, inout uint shadow_rays, inout uint secondary_rays) {
+    vec3 radiance = s.emission;
+    vec3 throughput = vec3(1.0);
+    for (uint depth = 0u; depth < pc.max_depth; depth++) {
+        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+        radiance += throughput * direct_light(s, v, pixel, dim, shadow_rays);
+        if (depth + 1u >= pc.max_depth) break;
+        vec3 wi;
+        vec3 weight;
+        float pdf;
+        float u_lobe = sample1(pixel, dim + 3u);
+        if (!sample_specular(s.m, s.normal, v, s.inside, sample2(pixel, dim + 4u), u_lobe, wi, weight, pdf)) break;
+        throughput *= weight;
+        // Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
+        // Survival 4x the weight: weak reflections still end most paths, at a quarter of the variance.
+        float survive = min(1.0, 4.0 * max(throughput.x, max(throughput.y, throughput.z)));
+        if (survive < 1.0) {
+            float u = unit_float(pcg_hash(sampling_key(pc.seed, pixel, dim + 2u) ^ pcg_hash(pc.sample_index)));
+            if (u >= survive) break;
+            throughput /= survive;
+        }
+        secondary_rays++;
+        vec3 o = offset_origin(s.position, s.geometric, wi);
+        rayQueryEXT q;
+        rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, 0.0, wi, 1e30);
+        while (rayQueryProceedEXT(q)) {}
+        bool hit = rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
+        float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
+        float light_density;
+        vec3 light = lights_along(o, wi, t_hit, light_density);
+        // A reflection (pdf > 0) that reaches a light shares it with light sampling; refraction has it alone.
+        if (light != vec3(0.0)) {
+            float w = pdf > 0.0 ? power_heuristic(pdf, light_density) : 1.0;
+            radiance += throughput * light * w;
+            break;
+        }
+        if (!hit) {
+            radiance += throughput * pc.background.rgb;
+            break;
+        }
+        v = -wi;
+        s = hit_surface(q, v);
+        float w = 1.0;
+        if (pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
+            float cos_light = abs(dot(s.geometric, wi));
+            float density = cos_light > 0.0 ? s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power) : 0.0;
+            w = power_heuristic(pdf, density);
+        }
+        radiance += throughput * s.emission * w;
+    }
+    return radiance;
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    bool in_image = gl_GlobalInvocationID.x < pc.width && gl_GlobalInvocationID.y < pc.height;
+    uint shadow_rays = 0u;
+    uint secondary_rays = 0u;
+    if (gl_LocalInvocationIndex == 0u) {
+        group_shadow_rays = 0u;
+        group_secondary_rays = 0u;
+    }
+    if (in_image) {
+        uint pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
+        uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
+        vec4 value = vec4(pc.background.rgb, 0.0);
+        if (ids.x != 0u) {
+            vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
+            vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
+            Surface s = gbuffer_surface(p, ids.y, v);
+            value = vec4(shade(s, v, pixel, shadow_rays, secondary_rays), 1.0);
+        }
+        // A sample that went wrong must not poison the pixel's whole estimate.
+        if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);
+        vec4 sum = pc.sample_index == 0u ? vec4(0.0) : imageLoad(accumulation, p);
+        imageStore(accumulation, p, sum + value);
+    }
+    memoryBarrierShared();
+    barrier();
+    atomicAdd(group_shadow_rays, shadow_rays);
+    atomicAdd(group_secondary_rays, secondary_rays);
+    memoryBarrierShared();
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        atomicAdd(counters[2u * pc.counter_slot], group_shadow_rays);
+        atomicAdd(counters[2u * pc.counter_slot + 1u], group_secondary_rays);
+    }
+}

@@ -1,0 +1,50 @@
+// The accumulation pass's data; mirrored by src/render/accumulate_layout.rs (size/offset tests there).
+#ifndef ACCUMULATE_LAYOUT_GLSL
+#define ACCUMULATE_LAYOUT_GLSL
+
+const float LIGHT_POINT = 0.0;
+const float LIGHT_SPOT = 1.0;
+const float LIGHT_DIRECTIONAL = 2.0;
+const float LIGHT_QUAD = 3.0;
+const float LIGHT_DISK = 4.0;
+const float LIGHT_SPHERE = 5.0;
+const float LIGHT_TRIANGLE = 6.0;
+
+struct GpuLight {
+    vec4 position_kind;  // xyz centre or first vertex, w kind
+    vec4 axis_u;         // xyz half extent u / radius * u axis / edge 1, w radius
+    vec4 axis_v;         // xyz half extent v / radius * v axis / edge 2, w area
+    vec4 normal;         // xyz direction of travel, w two-sided
+    vec4 emission;       // rgb, w selection CDF (inclusive)
+    vec4 cone;           // x cos outer, y cos inner, w selection probability
+};
+
+struct GpuPrimitiveRecord {
+    uint64_t positions;
+    uint64_t normals;
+    uint64_t uvs;
+    uint64_t indices;
+    uint material;
+    uint pad0;
+    uint pad1;
+    uint pad2;
+};
+
+layout(push_constant, std430) uniform AccumulatePush {
+    vec4 eye;          // w: 1 orthographic
+    vec4 forward;
+    vec4 background;
+    uint width;
+    uint height;
+    uint sample_index;
+    uint sample_count;
+    uint sampler_kind;
+    uint seed;
+    uint light_offset;
+    uint light_count;
+    uint analytic_light_count;
+    uint counter_slot;
+    uint max_depth;
+    float total_light_power;  // the sum the selection probabilities were divided by
+} pc;
+#endif

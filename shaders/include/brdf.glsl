@@ -1,0 +1,174 @@
+// The glTF 2.0 metallic-roughness BRDF (glTF 2.0 Appendix B): a Lambertian diffuse lobe weighted by 1 − F and a
+// GGX (Trowbridge-Reitz) specular lobe with the height-correlated Smith visibility, Schlick's Fresnel; plus
+// sampling of GGX visible normals (Heitz 2018) for the gloss and translucency rays of distributed ray tracing.
+#ifndef BRDF_GLSL
+#define BRDF_GLSL
+
+const float PI = 3.14159265358979;
+
+struct Shading {
+    vec3 albedo;
+    float metallic;
+    float roughness;
+    float transmission;
+    float ior;
+    float specular;  // KHR_materials_specular factor
+};
+
+float luminance(vec3 c) {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
+// An orthonormal basis (t, b, n) around a unit n (Duff et al. 2017).
+void make_basis(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// alpha = roughness², kept above a floor so a perfect mirror stays a (very narrow) lobe without NaN.
+float ggx_alpha(float roughness) {
+    return max(roughness * roughness, 1e-3);
+}
+
+float ggx_d(float nh, float a) {
+    float a2 = a * a;
+    float d = nh * nh * (a2 - 1.0) + 1.0;
+    return a2 / (PI * d * d);
+}
+
+// Smith G1 for GGX at cosine c.
+float smith_g1(float c, float a) {
+    float a2 = a * a;
+    return 2.0 * c / (c + sqrt(a2 + (1.0 - a2) * c * c));
+}
+
+// Height-correlated Smith visibility V = G2 / (4 n·l n·v).
+float smith_visibility(float nl, float nv, float a) {
+    float a2 = a * a;
+    float gv = nl * sqrt(nv * nv * (1.0 - a2) + a2);
+    float gl = nv * sqrt(nl * nl * (1.0 - a2) + a2);
+    float d = gv + gl;
+    return d > 0.0 ? 0.5 / d : 0.0;
+}
+
+// Schlick Fresnel at v·h: dielectric F0 from the IOR scaled by the specular factor, metal F0 the base colour.
+vec3 fresnel(Shading m, float vh) {
+    float r = (m.ior - 1.0) / (m.ior + 1.0);
+    vec3 f0 = mix(vec3(r * r * m.specular), m.albedo, m.metallic);
+    float f90 = mix(m.specular, 1.0, m.metallic);
+    float x = clamp(1.0 - vh, 0.0, 1.0);
+    float x2 = x * x;
+    return f0 + (vec3(f90) - f0) * (x2 * x2 * x);
+}
+
+// BRDF × cos for light arriving from l, seen from v, split into the diffuse and the specular lobe: the diffuse
+// lobe is estimated by light sampling alone, the specular one by light sampling and by gloss rays, combined
+// with multiple importance sampling (Veach and Guibas 1995).
+void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 specular) {
+    diffuse = vec3(0.0);
+    specular = vec3(0.0);
+    float nl = dot(n, l);
+    if (nl <= 0.0) return;
+    float nv = max(dot(n, v), 1e-4);
+    vec3 h = normalize(l + v);
+    vec3 f = fresnel(m, max(dot(v, h), 0.0));
+    diffuse = (1.0 - f) * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
+    float a = ggx_alpha(m.roughness);
+    specular = f * ggx_d(max(dot(n, h), 0.0), a) * smith_visibility(nl, nv, a) * nl;
+}
+
+// The probability of choosing reflection at microfacet normal h (the rest refracts).
+float reflect_probability(Shading m, float vh) {
+    vec3 f = fresnel(m, vh);
+    float pr = luminance(f);
+    float pt = luminance((1.0 - f) * m.transmission * (1.0 - m.metallic) * m.albedo);
+    return pr + pt > 0.0 ? pr / (pr + pt) : 0.0;
+}
+
+// Solid-angle density with which sample_specular reflects towards l: the visible-normal density
+// G1(v) D(h) / (4 n·v) (Heitz 2018, eq. 17 with the reflection Jacobian) times the reflection choice.
+float specular_pdf(Shading m, vec3 n, vec3 v, vec3 l) {
+    float nv = dot(n, v);
+    if (nv <= 0.0 || dot(n, l) <= 0.0) return 0.0;
+    vec3 h = normalize(l + v);
+    float a = ggx_alpha(m.roughness);
+    float vh = max(dot(v, h), 0.0);
+    return smith_g1(nv, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * nv) * reflect_probability(m, vh);
+}
+
+// The power heuristic (β = 2) weight of a strategy with density a against one with density b.
+float power_heuristic(float a, float b) {
+    float a2 = a * a;
+    float b2 = b * b;
+    return a2 + b2 > 0.0 ? a2 / (a2 + b2) : 0.0;
+}
+
+// A GGX visible normal for view ve in tangent space (z = normal), from u in [0,1)² (Heitz 2018, Listing 1).
+vec3 sample_ggx_vndf(vec3 ve, float a, vec2 u) {
+    vec3 vh = normalize(vec3(a * ve.x, a * ve.y, ve.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    float p1 = r * cos(phi);
+    float p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 0.0)));
+}
+
+// The specular continuation of a path at a surface: a direction around the ideal reflection (gloss) or
+// refraction (translucency), chosen by their Fresnel weights, and the throughput weight F·G1(l) / p of VNDF
+// sampling. `inside`: v is inside the material (refraction leaves it). False when the path ends here.
+// `pdf` is the reflection's solid-angle density (for MIS against light sampling); 0 for refraction, which light
+// sampling never covers.
+bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lobe, out vec3 wi, out vec3 weight,
+                     out float pdf) {
+    wi = vec3(0.0);
+    weight = vec3(0.0);
+    pdf = 0.0;
+    vec3 t;
+    vec3 b;
+    make_basis(n, t, b);
+    vec3 ve = vec3(dot(v, t), dot(v, b), dot(v, n));
+    if (ve.z <= 0.0) return false;
+    float a = ggx_alpha(m.roughness);
+    vec3 he = sample_ggx_vndf(ve, a, u);
+    vec3 h = normalize(t * he.x + b * he.y + n * he.z);
+    float vh = max(dot(v, h), 0.0);
+    vec3 f = fresnel(m, vh);
+    vec3 reflect_weight = f;
+    vec3 transmit_weight = (1.0 - f) * m.transmission * (1.0 - m.metallic) * m.albedo;
+    float pr = luminance(reflect_weight);
+    float pt = luminance(transmit_weight);
+    if (!(pr + pt > 0.0)) return false;
+    float p_reflect = pr / (pr + pt);
+    if (u_lobe < p_reflect) {
+        wi = reflect(-v, h);
+        float nl = dot(n, wi);
+        if (nl <= 0.0) return false;
+        weight = reflect_weight / p_reflect * smith_g1(nl, a);
+        pdf = smith_g1(ve.z, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * ve.z) * p_reflect;
+        return true;
+    }
+    float eta = inside ? m.ior : 1.0 / m.ior;
+    wi = refract(-v, h, eta);
+    if (dot(wi, wi) == 0.0) {
+        // Total internal reflection: the transmitted share reflects.
+        wi = reflect(-v, h);
+        float nl = dot(n, wi);
+        if (nl <= 0.0) return false;
+        weight = transmit_weight / (1.0 - p_reflect) * smith_g1(nl, a);
+        return true;
+    }
+    float nl = -dot(n, wi);
+    if (nl <= 0.0) return false;
+    weight = transmit_weight / (1.0 - p_reflect) * smith_g1(nl, a);
+    return true;
+}
+#endif

@@ -1,0 +1,35 @@
+#version 460
+// The resolve pass: the accumulated sum over N samples becomes the pixel estimate R = (1/N) Σ I (written back
+// in place as linear radiance, for EXR), then exposure, a tone map (clamp, or Narkowicz's 2015 fit of the ACES
+// filmic curve) and the sRGB encoding (IEC 61966-2-1) into an 8-bit image for PNG.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = 1, rgba8) uniform writeonly image2D display;
+
+layout(push_constant, std430) uniform ResolvePush {
+    uint width;
+    uint height;
+    float inv_samples;
+    float exposure_scale;
+    uint tone_map;
+} pc;
+
+vec3 aces_fit(vec3 x) {
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);
+}
+
+vec3 srgb_encode(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(12.92 * c, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, greaterThan(c, vec3(0.0031308)));
+}
+
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (gl_GlobalInvocationID.x >= pc.width || gl_GlobalInvocationID.y >= pc.height) return;
+    vec4 mean = imageLoad(accumulation, p) * pc.inv_samples;
+    imageStore(accumulation, p, mean);
+    vec3 c = max(mean.rgb * pc.exposure_scale, vec3(0.0));
+    c = pc.tone_map == 1u ? aces_fit(c) : clamp(c, 0.0, 1.0);
+    imageStore(display, p, vec4(srgb_encode(c), 1.0));
+}

@@ -1,0 +1,113 @@
+//! The accumulation and resolve passes' data, defined once for Rust; mirrored by
+//! `shaders/include/accumulate_layout.glsl` (sizes and offsets pinned by the tests below).
+use glam::Vec4;
+
+/// Light kinds as the shader reads them (`GpuLight::position_kind.w`).
+pub mod light_kind {
+    pub const POINT: f32 = 0.0;
+    pub const SPOT: f32 = 1.0;
+    pub const DIRECTIONAL: f32 = 2.0;
+    pub const QUAD: f32 = 3.0;
+    pub const DISK: f32 = 4.0;
+    pub const SPHERE: f32 = 5.0;
+    pub const TRIANGLE: f32 = 6.0;
+}
+
+/// One light at one sample time, in world space. Area lights carry radiance, point and spot lights intensity,
+/// directional lights irradiance (see `scene::light`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuLight {
+    /// xyz: centre (quad, disk, sphere, point, spot) or first vertex (triangle); w: kind.
+    pub position_kind: Vec4,
+    /// xyz: quad half-extent along u, disk radius × u axis, triangle edge p1 − p0; w: radius (point, spot,
+    /// sphere).
+    pub axis_u: Vec4,
+    /// xyz: quad half-extent along v, disk radius × v axis, triangle edge p2 − p0; w: emitting area in m².
+    pub axis_v: Vec4,
+    /// xyz: unit direction the light travels (area lights emit along it; spot and directional lights shine
+    /// along it); w: 1 when both sides emit.
+    pub normal: Vec4,
+    /// rgb: radiance, intensity or irradiance; w: the selection CDF up to and including this light.
+    pub emission: Vec4,
+    /// x: cos(outer cone), y: cos(inner cone) for spots; z: unused; w: the probability of selecting it.
+    pub cone: Vec4,
+}
+
+/// What the shader needs to shade a secondary hit on a primitive: its vertex streams by device address
+/// (`GL_EXT_buffer_reference`) and its material. Indexed by the TLAS instance's custom index (its mesh's first
+/// record) plus the BLAS geometry index (the primitive within the mesh).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPrimitiveRecord {
+    pub positions: u64,
+    pub normals: u64,
+    pub uvs: u64,
+    pub indices: u64,
+    pub material: u32,
+    pub pad: [u32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct AccumulatePush {
+    /// xyz: this sample's eye (the lens point); w: 1 for an orthographic camera.
+    pub eye: Vec4,
+    /// xyz: the camera's viewing direction (for orthographic view vectors).
+    pub forward: Vec4,
+    /// rgb: radiance where rays escape.
+    pub background: Vec4,
+    pub width: u32,
+    pub height: u32,
+    pub sample_index: u32,
+    pub sample_count: u32,
+    pub sampler_kind: u32,
+    pub seed: u32,
+    /// This sample's lights start at `light_offset` in the light buffer.
+    pub light_offset: u32,
+    pub light_count: u32,
+    /// Lights `0..analytic_light_count` of the sample are not geometry (quads, disks, spheres, points): specular
+    /// rays intersect them analytically.
+    pub analytic_light_count: u32,
+    /// The slot of the ray counters this sample adds to.
+    pub counter_slot: u32,
+    /// Path vertices along the specular chain (1: no gloss or translucency rays).
+    pub max_depth: u32,
+    /// The sum of the lights' selection powers (for the selection probability of an emissive triangle a
+    /// gloss ray hits).
+    pub total_light_power: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ResolvePush {
+    pub width: u32,
+    pub height: u32,
+    pub inv_samples: f32,
+    /// 2^exposure.
+    pub exposure_scale: f32,
+    /// 0: clamp, 1: filmic.
+    pub tone_map: u32,
+    pub pad: [u32; 3],
+}
+
+/// Ray counters per sample slot: (shadow rays, secondary rays).
+pub const COUNTERS_PER_SLOT: usize = 2;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    #[test]
+    fn layouts_match_the_glsl_structs() {
+        assert_eq!(size_of::<GpuLight>(), 96);
+        assert_eq!(offset_of!(GpuLight, emission), 64);
+        assert_eq!(size_of::<GpuPrimitiveRecord>(), 48);
+        assert_eq!(offset_of!(GpuPrimitiveRecord, material), 32);
+        assert_eq!(size_of::<AccumulatePush>(), 96);
+        assert_eq!(offset_of!(AccumulatePush, width), 48);
+        assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
+        assert_eq!(size_of::<ResolvePush>(), 32);
+    }
+}

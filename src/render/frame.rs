@@ -1,0 +1,361 @@
+//! The sample loop (DESIGN.md, "One frame"): for each of N samples a camera sample (pixel jitter, shutter time,
+//! lens point from the sampler), the instances and lights at that time, a TLAS rebuild, the G-buffer pass and
+//! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
+//! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
+use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass};
+use super::accumulate_layout::{AccumulatePush, GpuLight, COUNTERS_PER_SLOT};
+use super::gbuffer::{GBuffer, GBufferPass};
+use super::lights::{rest_transforms, LightSet};
+use super::ray_scene::RayScene;
+use super::resolve::ResolvePass;
+use super::SceneOnGpu;
+use crate::math::lens::{camera_sample, CameraSample};
+use crate::math::sampling::{sample_1d, sample_2d};
+use crate::output::Frame;
+use crate::scene::settings::{RenderSettings, SamplerKind};
+use crate::scene::{Projection, Scene};
+use crate::vk::accel::DynamicTlas;
+use crate::vk::commands::{image_barrier, memory_barrier, submit_and_wait, Access};
+use crate::vk::readback::read_image;
+use crate::vk::timer::TimestampPool;
+use crate::vk::{Buffer, Device, Image, MemoryLocation};
+use anyhow::{bail, Result};
+use ash::vk;
+use glam::{Vec2, Vec3};
+use std::sync::Arc;
+
+/// Sampler dimensions the host draws once per sample for the whole image (DESIGN.md's order).
+const DIM_PIXEL: u32 = 0;
+const DIM_TIME: u32 = 1;
+const DIM_LENS: u32 = 2;
+
+/// Path vertices along a specular chain: the visible surface and up to three gloss/translucency bounces
+/// (enough to see through a glass sphere: in, out, and what lies behind).
+pub const DEFAULT_MAX_DEPTH: u32 = 4;
+
+/// Options that are not picture settings.
+#[derive(Debug, Clone, Copy)]
+pub struct FrameOptions {
+    /// Time every pass with GPU timestamps (for benchmarks).
+    pub timestamps: bool,
+    pub max_depth: u32,
+}
+
+impl Default for FrameOptions {
+    fn default() -> Self {
+        Self { timestamps: false, max_depth: DEFAULT_MAX_DEPTH }
+    }
+}
+
+/// GPU time per pass summed over the frame, in milliseconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PassTimes {
+    pub tlas_ms: f64,
+    pub gbuffer_ms: f64,
+    pub accumulate_ms: f64,
+    pub resolve_ms: f64,
+}
+
+impl PassTimes {
+    pub fn total_ms(&self) -> f64 {
+        self.tlas_ms + self.gbuffer_ms + self.accumulate_ms + self.resolve_ms
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameStats {
+    pub samples: u32,
+    pub width: u32,
+    pub height: u32,
+    pub shadow_rays: u64,
+    pub secondary_rays: u64,
+    /// Wall-clock seconds of the sample loop and resolve (not loading or uploading).
+    pub seconds: f64,
+    pub pass_times: Option<PassTimes>,
+    /// Device memory allocated while the frame rendered (scene included), in bytes.
+    pub device_bytes: u64,
+    /// Of which the per-pixel images (G-buffer, accumulation, display).
+    pub image_bytes: u64,
+}
+
+/// The finished picture.
+pub struct RenderedFrame {
+    /// Linear radiance per pixel (the mean over samples); alpha is coverage.
+    pub linear: Frame,
+    /// Exposed, tone-mapped, sRGB-encoded 8-bit RGBA, ready for PNG.
+    pub display: Vec<u8>,
+    pub stats: FrameStats,
+}
+
+/// The error a render returns when its progress callback asked it to stop (Ctrl-C).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Interrupted;
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("interrupted")
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// The 32-bit seed the shaders hash from the 64-bit setting.
+pub fn seed32(seed: u64) -> u32 {
+    (seed ^ (seed >> 32)) as u32
+}
+
+/// Sample `index` of `count`'s shutter time, lens point and camera matrices (the same for every pixel).
+pub fn camera_sample_at(
+    scene: &Scene,
+    settings: &RenderSettings,
+    index: u32,
+) -> (f32, CameraSample, crate::scene::Camera) {
+    let (kind, seed, count) = (settings.sampler, seed32(settings.seed), settings.spp);
+    let jitter = sample_2d(kind, seed, 0, index, count, DIM_PIXEL) - Vec2::splat(0.5);
+    let (open, close) = scene.shutter;
+    // A closed shutter interval is the still frame exactly.
+    let t = if close > open { open + (close - open) * sample_1d(kind, seed, 0, index, count, DIM_TIME) } else { open };
+    let lens = sample_2d(kind, seed, 0, index, count, DIM_LENS);
+    let camera = scene.camera_at(t);
+    let sample = camera_sample(&camera, settings.width, settings.height, lens, jitter);
+    (t, sample, camera)
+}
+
+/// Samples per submission: enough to keep the host out of the way, few enough for a lively progress bar.
+fn batch_size(pixels: u64, spp: u32) -> u32 {
+    ((1u64 << 20) / pixels.max(1)).clamp(1, 8).min(u64::from(spp)) as u32
+}
+
+fn sampler_index(kind: SamplerKind) -> u32 {
+    match kind {
+        SamplerKind::Regular => 0,
+        SamplerKind::Random => 1,
+        SamplerKind::Jittered => 2,
+        SamplerKind::MultiJittered => 3,
+    }
+}
+
+const TIMESTAMPS_PER_SAMPLE: u32 = 4;
+
+/// Renders `settings.spp` samples of `scene` and resolves them. `progress(done, total)` is called after each
+/// batch; returning `false` stops the render with [`Interrupted`] (everything is freed on the way out).
+pub fn render_frame(
+    device: &Arc<Device>,
+    scene: &Scene,
+    on_gpu: &SceneOnGpu,
+    settings: &RenderSettings,
+    options: &FrameOptions,
+    progress: &mut dyn FnMut(u32, u32) -> bool,
+) -> Result<RenderedFrame> {
+    let (width, height, spp) = (settings.width, settings.height, settings.spp);
+    if width == 0 || height == 0 || spp == 0 {
+        bail!("nothing to render: {width}x{height} pixels, {spp} samples per pixel");
+    }
+    let started = std::time::Instant::now();
+    let extent = vk::Extent2D { width, height };
+    let texture_count = on_gpu.textures.images.len() as u32;
+    let gbuffer_pass = GBufferPass::new(device, texture_count)?;
+    let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
+    let gbuffer = GBuffer::new(device, width, height)?;
+    let ray_scene = RayScene::build(device, scene, &on_gpu.geometry, scene.materials.len() as u32)?;
+    let batch = batch_size(u64::from(width) * u64::from(height), spp);
+    let mut tlas = DynamicTlas::new(device, "scene TLAS", ray_scene.traced_instances.len() as u32, batch)?;
+
+    let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let accumulation = Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?;
+    let display = Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?;
+
+    // Lights per sample slot; the count can only shrink over the shutter (degenerate triangles drop out).
+    let rest = rest_transforms(scene);
+    let radius = scene.bounds().map(|(lo, hi)| (hi - lo).length() * 0.5).unwrap_or(1.0);
+    let first_lights = LightSet::at(scene, scene.shutter.0, &rest, radius);
+    let light_capacity = (scene.lights.len() + first_lights.lights.len() - first_lights.analytic).max(1);
+    let light_bytes = (light_capacity * std::mem::size_of::<GpuLight>()) as u64;
+    let mut lights = Buffer::new(
+        device,
+        "lights",
+        light_bytes * u64::from(batch),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::CpuToGpu,
+        16,
+    )?;
+    let mut counters = Buffer::new(
+        device,
+        "ray counters",
+        counter_bytes(batch),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::GpuToCpu,
+        16,
+    )?;
+    let accumulate = AccumulatePass::new(device, texture_count)?;
+    let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
+        tlas: &tlas.structure,
+        gbuffer: &gbuffer,
+        accumulation: &accumulation,
+        materials: &materials,
+        lights: &lights,
+        primitives: &ray_scene.records,
+        textures: &on_gpu.textures,
+        counters: &counters,
+    })?;
+    let resolve = ResolvePass::new(device)?;
+    let resolve_set = resolve.descriptor_set(&accumulation, &display)?;
+    let timer = if options.timestamps {
+        Some(TimestampPool::new(device, "frame timestamps", batch * TIMESTAMPS_PER_SAMPLE + 2)?)
+    } else {
+        None
+    };
+    let device_bytes = device.allocator().generate_report().total_allocated_bytes;
+    let image_bytes = u64::from(width) * u64::from(height) * (super::gbuffer_layout::bytes_per_pixel() as u64 + 16 + 4);
+
+    let sampler = sampler_index(settings.sampler);
+    let seed = seed32(settings.seed);
+    let mut times = PassTimes::default();
+    let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
+    let mut done = 0u32;
+    let mut skipped_warned = false;
+    while done < spp {
+        let count = batch.min(spp - done);
+        // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
+        let mut samples = Vec::with_capacity(count as usize);
+        let mut inputs = Vec::with_capacity(count as usize);
+        for slot in 0..count {
+            let index = done + slot;
+            let (t, camera_sample, camera) = camera_sample_at(scene, settings, index);
+            let transforms = scene.instance_transforms_at(t);
+            tlas.write_slot(slot, &ray_scene.tlas_instances(scene, &transforms))?;
+            let set = if t == scene.shutter.0 { first_lights.clone() } else { LightSet::at(scene, t, &rest, radius) };
+            if set.skipped_triangles > 0 && !skipped_warned {
+                skipped_warned = true;
+                eprintln!(
+                    "warning: {} emissive triangles beyond the first {} are not sampled as lights",
+                    set.skipped_triangles,
+                    super::lights::MAX_EMISSIVE_TRIANGLES
+                );
+            }
+            let light_count = set.lights.len().min(light_capacity);
+            lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
+            inputs.push(gbuffer_pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?);
+            let orthographic = matches!(camera.projection, Projection::Orthographic { .. });
+            let forward = camera.world_from_camera.transform_vector3(-Vec3::Z).normalize_or_zero();
+            let push = AccumulatePush {
+                eye: camera_sample.eye.extend(if orthographic { 1.0 } else { 0.0 }),
+                forward: forward.extend(0.0),
+                background: settings.background.extend(0.0),
+                width,
+                height,
+                sample_index: index,
+                sample_count: spp,
+                sampler_kind: sampler,
+                seed,
+                light_offset: (slot as usize * light_capacity) as u32,
+                light_count: light_count as u32,
+                analytic_light_count: set.analytic.min(light_count) as u32,
+                counter_slot: slot,
+                max_depth: options.max_depth.max(1),
+                total_light_power: set.total_power,
+            };
+            samples.push((camera_sample, push));
+        }
+        counters.write(0, &vec![0u8; counter_bytes(batch) as usize])?;
+        if let Some(timer) = &timer {
+            timer.reset();
+        }
+        let last = done + count == spp;
+        submit_and_wait(device, "sample batch", |cmd| {
+            for (slot, ((camera_sample, push), inputs)) in samples.iter().zip(&inputs).enumerate() {
+                let first = done == 0 && slot == 0;
+                let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
+                    if let Some(timer) = &timer {
+                        timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
+                    }
+                };
+                stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
+                tlas.record_build(cmd, slot as u32);
+                stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
+                let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
+                gbuffer_pass.record(cmd, &gbuffer, &on_gpu.geometry, inputs, camera_sample, last_read);
+                for image in &gbuffer.color {
+                    image_barrier(
+                        device,
+                        cmd,
+                        image,
+                        (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
+                        (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
+                    );
+                }
+                stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
+                if first {
+                    image_barrier(
+                        device,
+                        cmd,
+                        &accumulation,
+                        (vk::ImageLayout::UNDEFINED, Access::NONE),
+                        (vk::ImageLayout::GENERAL, Access::COMPUTE_READ_WRITE),
+                    );
+                } else {
+                    memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
+                }
+                accumulate.record(cmd, &accumulate_set, push);
+                stamp(3, vk::PipelineStageFlags2::COMPUTE_SHADER);
+            }
+            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
+            if last {
+                if let Some(timer) = &timer {
+                    timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, batch * TIMESTAMPS_PER_SAMPLE);
+                }
+                memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
+                image_barrier(
+                    device,
+                    cmd,
+                    &display,
+                    (vk::ImageLayout::UNDEFINED, Access::NONE),
+                    (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+                );
+                resolve.record(cmd, &resolve_set, extent, spp, settings.exposure, settings.tone_map);
+                if let Some(timer) = &timer {
+                    timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, batch * TIMESTAMPS_PER_SAMPLE + 1);
+                }
+            }
+            Ok(())
+        })?;
+        let counts: Vec<u32> = counters.read()?;
+        for slot in 0..count as usize {
+            shadow_rays += u64::from(counts[slot * COUNTERS_PER_SLOT]);
+            secondary_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + 1]);
+        }
+        if let Some(timer) = &timer {
+            let ns = timer.read_ns()?;
+            for slot in 0..count {
+                let t = &ns[(slot * TIMESTAMPS_PER_SAMPLE) as usize..];
+                times.tlas_ms += (t[1] - t[0]) / 1e6;
+                times.gbuffer_ms += (t[2] - t[1]) / 1e6;
+                times.accumulate_ms += (t[3] - t[2]) / 1e6;
+            }
+            if last {
+                let r = &ns[(batch * TIMESTAMPS_PER_SAMPLE) as usize..];
+                times.resolve_ms += (r[1] - r[0]) / 1e6;
+            }
+        }
+        drop(inputs);
+        done += count;
+        if !progress(done, spp) && done < spp {
+            return Err(Interrupted.into());
+        }
+    }
+    let linear = read_image(device, &accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_READ_WRITE)?;
+    let linear = Frame::new(width, height, linear.to_rgba_f32()?)?;
+    let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
+    let stats = FrameStats {
+        samples: spp,
+        width,
+        height,
+        shadow_rays,
+        secondary_rays,
+        seconds: started.elapsed().as_secs_f64(),
+        pass_times: options.timestamps.then_some(times),
+        device_bytes,
+        image_bytes,
+    };
+    Ok(RenderedFrame { linear, display, stats })
+}

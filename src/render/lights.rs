@@ -1,0 +1,208 @@
+//! The lights of one sample time as the accumulation pass reads them: the scene's lights (moved with their
+//! nodes) and every emissive triangle, in world space, with a selection probability proportional to each
+//! light's power (so bright lights get most of the shadow rays). Lights that are not geometry come first: the
+//! shader intersects those analytically along specular rays; emissive triangles are in the TLAS.
+use super::accumulate_layout::{light_kind, GpuLight};
+use crate::scene::{LightShape, Scene};
+use glam::{Mat3, Mat4, Vec3, Vec4};
+use std::f32::consts::PI;
+
+/// Emissive triangles beyond this many are still seen and reflected, but not sampled as lights (a warning says
+/// so): the light buffer holds one record per triangle per sample in a batch.
+pub const MAX_EMISSIVE_TRIANGLES: usize = 1 << 16;
+
+/// One sample time's lights.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LightSet {
+    pub lights: Vec<GpuLight>,
+    /// `lights[..analytic]` are not geometry.
+    pub analytic: usize,
+    /// Emissive triangles not sampled because of `MAX_EMISSIVE_TRIANGLES`.
+    pub skipped_triangles: usize,
+    /// The sum of the selection powers; a light's probability is its power over this.
+    pub total_power: f32,
+}
+
+fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
+}
+
+/// Node world transforms at rest, for moving lights with their nodes (`LightSet::at` takes them once per frame).
+pub fn rest_transforms(scene: &Scene) -> Vec<Mat4> {
+    scene.node_world_transforms(None)
+}
+
+impl LightSet {
+    /// The lights at time `t`. `rest` are the node transforms at rest (`rest_transforms`); `scene_radius`
+    /// turns a directional light's irradiance into a power for selection.
+    pub fn at(scene: &Scene, t: f32, rest: &[Mat4], scene_radius: f32) -> Self {
+        let moved = scene.node_world_transforms(Some(t));
+        let mut lights = Vec::new();
+        let mut powers = Vec::new();
+        for light in &scene.lights {
+            let world = match light.node {
+                Some(n) if n < moved.len() && n < rest.len() => moved[n] * rest[n].inverse() * light.world_from_light,
+                _ => light.world_from_light,
+            };
+            if !world.is_finite() {
+                continue;
+            }
+            let position = world.w_axis.truncate();
+            let x = world.x_axis.truncate();
+            let y = world.y_axis.truncate();
+            let travel = (-world.z_axis.truncate()).normalize_or_zero();
+            let e = light.emission;
+            let mut g = GpuLight {
+                position_kind: position.extend(0.0),
+                axis_u: Vec4::ZERO,
+                axis_v: Vec4::ZERO,
+                normal: travel.extend(0.0),
+                emission: e.extend(0.0),
+                cone: Vec4::ZERO,
+            };
+            let power = match light.shape {
+                LightShape::Point { radius } => {
+                    g.position_kind.w = light_kind::POINT;
+                    g.axis_u.w = radius * x.length();
+                    4.0 * PI * luminance(e)
+                }
+                LightShape::Spot { inner_cone, outer_cone, radius } => {
+                    g.position_kind.w = light_kind::SPOT;
+                    g.axis_u.w = radius * x.length();
+                    g.cone = Vec4::new(outer_cone.cos(), inner_cone.cos(), 0.0, 0.0);
+                    2.0 * PI * (1.0 - outer_cone.cos()).max(1e-4) * luminance(e)
+                }
+                LightShape::Directional => {
+                    g.position_kind.w = light_kind::DIRECTIONAL;
+                    PI * scene_radius * scene_radius * luminance(e)
+                }
+                LightShape::Quad { size } => {
+                    g.position_kind.w = light_kind::QUAD;
+                    g.axis_u = (x * size.x * 0.5).extend(0.0);
+                    g.axis_v = (y * size.y * 0.5).extend(0.0);
+                    let area = (x * size.x).cross(y * size.y).length();
+                    g.axis_v.w = area;
+                    PI * luminance(e) * area
+                }
+                LightShape::Disk { radius } => {
+                    g.position_kind.w = light_kind::DISK;
+                    g.axis_u = (x * radius).extend(0.0);
+                    g.axis_v = (y * radius).extend(0.0);
+                    let area = PI * (x * radius).cross(y * radius).length();
+                    g.axis_v.w = area;
+                    PI * luminance(e) * area
+                }
+                LightShape::Sphere { radius } => {
+                    g.position_kind.w = light_kind::SPHERE;
+                    let r = radius * x.length();
+                    g.axis_u.w = r;
+                    g.axis_v.w = 4.0 * PI * r * r;
+                    PI * luminance(e) * 4.0 * PI * r * r
+                }
+            };
+            lights.push(g);
+            powers.push(power);
+        }
+        let analytic = lights.len();
+        let mut skipped_triangles = 0;
+        let transforms = scene.instance_transforms_at(t);
+        'instances: for (instance, world) in scene.instances.iter().zip(&transforms) {
+            let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+            for primitive in &scene.meshes[instance.mesh].primitives {
+                let Some(material) = primitive.material.and_then(|m| scene.materials.get(m)) else { continue };
+                // Emissive textures vary over the surface; sampling by the factor alone would be biased, so such
+                // surfaces only shine where rays see them.
+                if luminance(material.emissive) <= 0.0 || material.emissive_texture.is_some() {
+                    continue;
+                }
+                for tri in primitive.indices.chunks_exact(3) {
+                    if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
+                        skipped_triangles += primitive.indices.len() / 3;
+                        continue 'instances;
+                    }
+                    let Some(p) = tri.iter().map(|&i| primitive.positions.get(i as usize)).collect::<Option<Vec<_>>>()
+                    else {
+                        continue;
+                    };
+                    let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
+                    let (e1, e2) = (p1 - p0, p2 - p0);
+                    let cross = e1.cross(e2);
+                    let area = 0.5 * cross.length();
+                    if area.is_nan() || area <= 0.0 || !area.is_finite() {
+                        continue;
+                    }
+                    let mut n = cross.normalize();
+                    // glTF's front face winds counter-clockwise; vertex normals, when present, say which side
+                    // the surface faces.
+                    let normal_sum: Vec3 =
+                        tri.iter().filter_map(|&i| primitive.normals.get(i as usize)).map(|&v| normal_matrix * v).sum();
+                    if normal_sum.dot(n) < 0.0 {
+                        n = -n;
+                    }
+                    let two_sided = material.double_sided;
+                    lights.push(GpuLight {
+                        position_kind: p0.extend(light_kind::TRIANGLE),
+                        axis_u: e1.extend(0.0),
+                        axis_v: e2.extend(area),
+                        normal: n.extend(if two_sided { 1.0 } else { 0.0 }),
+                        emission: material.emissive.extend(0.0),
+                        cone: Vec4::ZERO,
+                    });
+                    powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
+                }
+            }
+        }
+        // Selection: proportional to power; lights with no power are never chosen.
+        let total: f64 = powers.iter().map(|&p| f64::from(p.max(0.0))).sum();
+        let mut running = 0.0f64;
+        for (light, power) in lights.iter_mut().zip(&powers) {
+            let p = if total > 0.0 { f64::from(power.max(0.0)) / total } else { 0.0 };
+            running += p;
+            light.cone.w = p as f32;
+            light.emission.w = running as f32;
+        }
+        if let Some(last) = lights.iter_mut().rev().find(|l| l.cone.w > 0.0) {
+            // Rounding must not leave a gap at the top of the CDF.
+            last.emission.w = 1.0;
+        }
+        Self { lights, analytic, skipped_triangles, total_power: total as f32 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::library;
+
+    #[test]
+    fn the_cornell_ceiling_light_is_sampled_as_two_triangles_facing_down() {
+        let scene = library::cornell();
+        let set = LightSet::at(&scene, 0.0, &rest_transforms(&scene), 1.0);
+        let triangles: Vec<&GpuLight> =
+            set.lights.iter().filter(|l| l.position_kind.w == light_kind::TRIANGLE).collect();
+        assert_eq!(triangles.len(), 2);
+        for t in &triangles {
+            assert!(t.normal.y < -0.99, "the ceiling light must face down, normal {:?}", t.normal);
+        }
+        let total: f32 = set.lights.iter().map(|l| l.cone.w).sum();
+        assert!((total - 1.0).abs() < 1e-5);
+        assert_eq!(set.lights.last().map(|l| l.emission.w), Some(1.0));
+    }
+
+    #[test]
+    fn selection_follows_power() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/soft-shadows.toml");
+        let scene = crate::scene::scene_file::load_scene_file(&path, None).expect("the committed scene loads").scene;
+        let set = LightSet::at(&scene, 0.0, &rest_transforms(&scene), 1.0);
+        assert_eq!(set.analytic, set.lights.len());
+        // Three area lights of 60 W each (radiance from power): equal power, equal probability.
+        let areas: Vec<f32> = set
+            .lights
+            .iter()
+            .filter(|l| [light_kind::QUAD, light_kind::DISK, light_kind::SPHERE].contains(&l.position_kind.w))
+            .map(|l| l.cone.w)
+            .collect();
+        assert_eq!(areas.len(), 3);
+        assert!((areas[0] - areas[1]).abs() < 1e-4 && (areas[1] - areas[2]).abs() < 1e-4, "{areas:?}");
+    }
+}

@@ -1,0 +1,65 @@
+//! The resolve pass (`shaders/resolve.comp`): divides the accumulated sum by the sample count in place (linear
+//! radiance for EXR), and writes exposure → tone map → sRGB into an 8-bit image for PNG.
+use super::accumulate_layout::ResolvePush;
+use crate::scene::settings::ToneMap;
+use crate::shaders;
+use crate::vk::commands::labelled;
+use crate::vk::descriptors::DescriptorSet;
+use crate::vk::pipeline::{Binding, Pipeline};
+use crate::vk::{Device, Image};
+use anyhow::Result;
+use ash::vk;
+use std::sync::Arc;
+
+pub struct ResolvePass {
+    pipeline: Pipeline,
+    device: Arc<Device>,
+}
+
+impl ResolvePass {
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
+        let bindings =
+            [Binding::new(0, vk::DescriptorType::STORAGE_IMAGE), Binding::new(1, vk::DescriptorType::STORAGE_IMAGE)];
+        let pipeline = Pipeline::compute(
+            device,
+            "resolve pipeline",
+            ("resolve.comp", shaders::RESOLVE_COMP),
+            &bindings,
+            std::mem::size_of::<ResolvePush>() as u32,
+        )?;
+        Ok(Self { pipeline, device: device.clone() })
+    }
+
+    pub fn descriptor_set(&self, accumulation: &Image, display: &Image) -> Result<DescriptorSet> {
+        let set = self.pipeline.new_descriptor_set("resolve set")?;
+        set.storage_image(0, accumulation).storage_image(1, display);
+        Ok(set)
+    }
+
+    /// Records the resolve of `samples` accumulated samples; both images are in `GENERAL`.
+    pub fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: &DescriptorSet,
+        extent: vk::Extent2D,
+        samples: u32,
+        exposure: f32,
+        tone_map: ToneMap,
+    ) {
+        let push = ResolvePush {
+            width: extent.width,
+            height: extent.height,
+            inv_samples: 1.0 / samples.max(1) as f32,
+            exposure_scale: exposure.exp2(),
+            tone_map: match tone_map {
+                ToneMap::Clamp => 0,
+                ToneMap::Filmic => 1,
+            },
+            pad: [0; 3],
+        };
+        labelled(&self.device, cmd, "resolve pass", || {
+            self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(&push));
+            unsafe { self.device.raw.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1) };
+        });
+    }
+}
