@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod raycast;
+pub mod scenes;
 
 use std::sync::Arc;
 use strata::vk::validation::ValidationLog;

@@ -1,0 +1,138 @@
+//! Small scenes built in code for the optics tests, and the measurements those tests make on rendered frames.
+use glam::{Mat4, Vec2, Vec3, Vec4};
+use std::sync::Arc;
+use strata::render::frame::{render_frame, FrameOptions, RenderedFrame};
+use strata::render::SceneOnGpu;
+use strata::scene::camera::{look_at, Lens};
+use strata::scene::settings::{RenderSettings, SamplerKind, ToneMap};
+use strata::scene::surface::compute_surface_derivatives;
+use strata::scene::{Camera, Instance, Material, Mesh, Node, NodeTransform, Primitive, Projection, Scene};
+use strata::vk::Device;
+
+/// A white-ish Lambertian surface without a specular lobe (KHR_materials_specular factor 0), so its radiance is
+/// exactly albedo / π × irradiance.
+pub fn lambertian(scene: &mut Scene, albedo: f32) -> usize {
+    scene.materials.push(Material {
+        name: format!("lambertian {albedo}"),
+        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        ..Default::default()
+    });
+    scene.materials.len() - 1
+}
+
+/// A black surface that only emits (one-sided: from its front face).
+pub fn emitter(scene: &mut Scene, radiance: f32) -> usize {
+    scene.materials.push(Material {
+        name: format!("emitter {radiance}"),
+        base_color: Vec4::new(0.0, 0.0, 0.0, 1.0),
+        metallic: 0.0,
+        specular: 0.0,
+        emissive: Vec3::splat(radiance),
+        ..Default::default()
+    });
+    scene.materials.len() - 1
+}
+
+pub fn metal(scene: &mut Scene, roughness: f32) -> usize {
+    scene.materials.push(Material {
+        name: format!("metal {roughness}"),
+        base_color: Vec4::ONE,
+        metallic: 1.0,
+        roughness,
+        ..Default::default()
+    });
+    scene.materials.len() - 1
+}
+
+/// Places `primitive` with its own node; returns the node index (for motion).
+pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from_object: Mat4) -> usize {
+    compute_surface_derivatives(&mut primitive);
+    scene.meshes.push(Mesh { name: name.into(), primitives: vec![primitive] });
+    let mesh = scene.meshes.len() - 1;
+    let node = scene.nodes.len();
+    scene.nodes.push(Node {
+        name: name.into(),
+        parent: None,
+        children: Vec::new(),
+        transform: NodeTransform::Matrix(world_from_object),
+        mesh: Some(mesh),
+        camera: None,
+        light: None,
+    });
+    scene.roots.push(node);
+    scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
+    node
+}
+
+/// A plane of `size` (x by z) facing +Y (or −Y when `facing_down`), centred at `center`.
+pub fn plane_at(size: Vec2, center: Vec3, facing_down: bool, material: usize) -> (Primitive, Mat4) {
+    let rotation = if facing_down { Mat4::from_rotation_x(std::f32::consts::PI) } else { Mat4::IDENTITY };
+    (strata::scene::shapes::plane(size, Vec2::ONE, Some(material)), Mat4::from_translation(center) * rotation)
+}
+
+/// An orthographic camera at height `height` above `center` looking straight down: image x is world +x, image y
+/// (down) is world +z; the image spans 2·half_height metres vertically.
+pub fn ortho_down(center: Vec3, height: f32, half_height: f32) -> Camera {
+    let eye = center + Vec3::Y * height;
+    Camera {
+        name: "ortho down".into(),
+        world_from_camera: look_at(eye, center, Vec3::NEG_Z),
+        projection: Projection::Orthographic { xmag: half_height, ymag: half_height, znear: 0.01, zfar: 100.0 },
+        lens: Lens::PINHOLE,
+    }
+}
+
+pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        spp,
+        sampler,
+        seed: 7,
+        background: Vec3::ZERO,
+        exposure: 0.0,
+        tone_map: ToneMap::Clamp,
+        output: None,
+    }
+}
+
+pub fn render(device: &Arc<Device>, scene: &Scene, settings: &RenderSettings) -> RenderedFrame {
+    let on_gpu = SceneOnGpu::upload(device, scene).expect("upload");
+    render_frame(device, scene, &on_gpu, settings, &FrameOptions::default(), &mut |_, _| true).expect("render")
+}
+
+/// Mean red radiance of each column over rows `rows`.
+pub fn column_profile(frame: &RenderedFrame, rows: std::ops::Range<u32>) -> Vec<f32> {
+    let f = &frame.linear;
+    (0..f.width).map(|x| rows.clone().map(|y| f.pixel(x, y)[0]).sum::<f32>() / rows.len() as f32).collect()
+}
+
+/// Mean red radiance of each row over columns `columns`.
+pub fn row_profile(frame: &RenderedFrame, columns: std::ops::Range<u32>) -> Vec<f32> {
+    let f = &frame.linear;
+    (0..f.height).map(|y| columns.clone().map(|x| f.pixel(x, y)[0]).sum::<f32>() / columns.len() as f32).collect()
+}
+
+/// Where a rising profile first crosses `level` (linear interpolation between pixel centres, in pixels from the
+/// left edge of pixel 0).
+pub fn crossing(profile: &[f32], level: f32) -> Option<f32> {
+    profile
+        .windows(2)
+        .enumerate()
+        .find_map(|(i, w)| (w[0] < level && w[1] >= level).then(|| i as f32 + 0.5 + (level - w[0]) / (w[1] - w[0])))
+}
+
+/// The 10%–90% rise width of a profile that goes from `low` to `high`, in pixels.
+pub fn rise_width(profile: &[f32], low: f32, high: f32) -> f32 {
+    let a = crossing(profile, low + 0.1 * (high - low)).expect("profile crosses 10%");
+    let b = crossing(profile, low + 0.9 * (high - low)).expect("profile crosses 90%");
+    b - a
+}
+
+pub fn assert_finite(frame: &RenderedFrame, what: &str) {
+    let bad = frame.linear.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
+    assert_eq!(bad, 0, "{what}: {bad} pixels are NaN or infinite");
+}
