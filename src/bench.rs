@@ -108,3 +108,81 @@ pub fn time_gbuffer(
         median_ms: times[times.len() / 2],
     })
 }
+
+/// One distributed-ray-traced frame, measured.
+#[derive(Debug, Clone)]
+pub struct FrameFigure {
+    pub stats: crate::render::frame::FrameStats,
+    /// Device memory of the scene alone (geometry, textures), before the frame's own allocations.
+    pub scene_bytes: u64,
+    /// The bare ray-query probe on the same TLAS: rays cast and GPU ms.
+    pub probe_rays: u64,
+    pub probe_ms: f64,
+}
+
+/// Renders `scene` at `width` × `height` with `spp` samples, timing every pass, then casts as many bare rays as
+/// the accumulation pass cast per sample (camera rays through jittered pixels, closest hit, no shading) at the
+/// scene's TLAS, for the driver's ray-query ceiling.
+pub fn time_frame(gpu: &Gpu, scene: &Scene, width: u32, height: u32, spp: u32, probe: bool) -> Result<FrameFigure> {
+    use crate::render::frame::{render_frame, FrameOptions};
+    use crate::render::ray_probe::{ProbeRay, RayProbe};
+    let device = &gpu.device;
+    let on_gpu = SceneOnGpu::upload(device, scene)?;
+    let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
+    let settings = crate::scene::settings::RenderSettings {
+        width,
+        height,
+        spp,
+        sampler: crate::scene::settings::SamplerKind::Jittered,
+        ..Default::default()
+    };
+    let options = FrameOptions { timestamps: true, ..Default::default() };
+    let frame = render_frame(device, scene, &on_gpu, &settings, &options, &mut |_, _| true)?;
+    let stats = frame.stats;
+    let (mut probe_rays, mut probe_ms) = (0, 0.0);
+    if probe {
+        let ray_scene = crate::render::ray_scene::RayScene::build(device, scene, &on_gpu.geometry, 0)?;
+        let transforms = scene.instance_transforms_at(scene.shutter.0);
+        let tlas = crate::vk::accel::AccelerationStructure::build_tlas(
+            device,
+            "probe TLAS",
+            &ray_scene.tlas_instances(scene, &transforms),
+        )?;
+        let per_sample = ((stats.shadow_rays + stats.secondary_rays) / u64::from(spp.max(1))).max(1);
+        let camera = scene.camera_at(scene.shutter.0);
+        let sample = camera_sample(&camera, width, height, Vec2::splat(0.5), Vec2::ZERO);
+        let world_from_clip = sample.clip_from_world().inverse();
+        let rays: Vec<ProbeRay> = (0..per_sample)
+            .map(|i| {
+                let h = crate::math::sampling::pcg_hash(i as u32);
+                let u = crate::math::sampling::unit_float(h);
+                let v = crate::math::sampling::unit_float(crate::math::sampling::pcg_hash(h));
+                let ndc = glam::Vec2::new(u * 2.0 - 1.0, v * 2.0 - 1.0);
+                let near = world_from_clip.project_point3(ndc.extend(0.0));
+                let far = world_from_clip.project_point3(ndc.extend(0.999));
+                ProbeRay { origin: near, t_min: 0.0, direction: (far - near).normalize_or_zero(), t_max: 1e30 }
+            })
+            .collect();
+        let timer = TimestampPool::new(device, "probe timestamps", 2)?;
+        let probe = RayProbe::new(device)?;
+        // One warm-up, then the measured cast.
+        probe.cast_timed(&tlas, &rays, Some(&timer))?;
+        probe_ms = probe.cast_timed(&tlas, &rays, Some(&timer))?.1;
+        probe_rays = per_sample;
+    }
+    Ok(FrameFigure { stats, scene_bytes, probe_rays, probe_ms })
+}
+
+/// Least-squares exponent b of y = a·x^b.
+pub fn fitted_exponent(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|(x, y)| (x.ln(), y.ln())).unzip();
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let cov: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let var: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
+    if var > 0.0 {
+        cov / var
+    } else {
+        0.0
+    }
+}

@@ -33,7 +33,8 @@ enum Command {
     /// Khronos validation layer is installed.
     Info(InfoArgs),
     /// Measure pass times with GPU timestamps and print figures (no pass/fail): the G-buffer pass per sample for
-    /// the Cornell box and a 1M-triangle mesh at 512x512 and 1280x720, and the cost of bump-mapping derivatives.
+    /// the Cornell box and a 1M-triangle mesh at 512x512 and 1280x720, the cost of bump-mapping derivatives; and
+    /// whole frames (per-pass times, rays/s against a bare ray-query probe, scaling with spp and pixels, memory).
     #[command(after_help = "Figures vary with the machine and its load; compare the ratios printed in one run.\n\n\
                             Examples:\n  strata bench\n  strata bench --samples 9 --scene scenes/cornell.toml")]
     Bench(BenchArgs),
@@ -47,6 +48,19 @@ struct BenchArgs {
     /// The scene file of the "cornell" cases.
     #[arg(long, value_name = "FILE", default_value = "scenes/cornell.toml")]
     scene: PathBuf,
+    /// The second scene of the frame benchmark.
+    #[arg(long, value_name = "FILE", default_value = "scenes/showcase.toml")]
+    showcase: PathBuf,
+    /// Which benchmark: gbuffer (pass times and bump cost), frame (whole distributed-ray-traced frames, the
+    /// ray-query ceiling, scaling and memory), or all.
+    #[arg(long, value_name = "WHICH", default_value = "all", value_parser = ["all", "gbuffer", "frame"])]
+    only: String,
+    /// Samples per pixel of the frame benchmark.
+    #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    spp: u32,
+    /// Image size of the frame benchmark.
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
     /// Use this device: its index in `strata info`, or part of its name.
     #[arg(long, value_name = "NAME|INDEX")]
     device: Option<String>,
@@ -502,6 +516,108 @@ impl ProgressBar {
 }
 
 fn bench(args: BenchArgs) -> Result<()> {
+    if args.only != "frame" {
+        bench_gbuffer(&args)?;
+    }
+    if args.only != "gbuffer" {
+        if args.only == "all" {
+            println!();
+        }
+        bench_frame(&args)?;
+    }
+    Ok(())
+}
+
+fn bench_frame(args: &BenchArgs) -> Result<()> {
+    use strata::bench::{fitted_exponent, time_frame};
+    let gpu = Gpu::new(&GpuOptions { validation: false, echo_messages: false, device: args.device.clone() })?;
+    let (w, h) = args.size;
+    let pixels = f64::from(w) * f64::from(h);
+    println!(
+        "Frames of distributed ray tracing at {w}x{h}, {} spp (jittered), on {}",
+        args.spp, gpu.device.report.name
+    );
+    for path in [&args.scene, &args.showcase] {
+        let mut scene = strata::load_scene(path)?;
+        if !scene.has_light() {
+            scene.add_default_light();
+        }
+        eprint!("\r{} ...", path.display());
+        let f = time_frame(&gpu, &scene, w, h, args.spp, true)?;
+        eprint!("\r\x1b[2K");
+        let s = &f.stats;
+        let t = s.pass_times.unwrap_or_default();
+        let n = f64::from(s.samples);
+        let total = t.total_ms();
+        let rays = (s.shadow_rays + s.secondary_rays) as f64;
+        let accumulate_rays_per_s = rays / (t.accumulate_ms / 1e3);
+        let probe_rays_per_s = f.probe_rays as f64 / (f.probe_ms / 1e3);
+        let frame_bytes = s.device_bytes.saturating_sub(f.scene_bytes);
+        println!("{}:", path.display());
+        println!(
+            "  GPU ms per sample: TLAS {:.2}, G-buffer {:.2}, accumulate {:.2}; resolve {:.2} per frame",
+            t.tlas_ms / n,
+            t.gbuffer_ms / n,
+            t.accumulate_ms / n,
+            t.resolve_ms
+        );
+        println!(
+            "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 33.3%)",
+            n / (total / 1e3),
+            s.seconds,
+            100.0 * (t.tlas_ms + t.gbuffer_ms) / total
+        );
+        println!(
+            "  rays per sample {:.0} shadow + {:.0} secondary; {:.2} M shadow rays/s, {:.2} M secondary rays/s",
+            s.shadow_rays as f64 / n,
+            s.secondary_rays as f64 / n,
+            s.shadow_rays as f64 / (t.accumulate_ms / 1e3) / 1e6,
+            s.secondary_rays as f64 / (t.accumulate_ms / 1e3) / 1e6
+        );
+        println!(
+            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): {:.1}% \
+             (target >= 60%)",
+            accumulate_rays_per_s / 1e6,
+            probe_rays_per_s / 1e6,
+            f.probe_rays,
+            100.0 * accumulate_rays_per_s / probe_rays_per_s
+        );
+        println!(
+            "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}; target < 100)",
+            f.scene_bytes as f64 / 1048576.0,
+            frame_bytes as f64 / 1048576.0,
+            frame_bytes as f64 / pixels,
+            s.image_bytes as f64 / pixels
+        );
+    }
+    // Scaling: total GPU time against spp at a fixed size, and against pixels at a fixed spp.
+    let mut scene = strata::load_scene(&args.scene)?;
+    if !scene.has_light() {
+        scene.add_default_light();
+    }
+    let mut by_spp = Vec::new();
+    for spp in [8u32, 16, 32] {
+        eprint!("\rscaling: {spp} spp ...");
+        let f = time_frame(&gpu, &scene, 256, 256, spp, false)?;
+        by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
+    }
+    let mut by_pixels = Vec::new();
+    for side in [128u32, 256, 512] {
+        eprint!("\rscaling: {side}x{side} ...");
+        let f = time_frame(&gpu, &scene, side, side, 8, false)?;
+        by_pixels.push((f64::from(side * side), f.stats.pass_times.unwrap_or_default().total_ms()));
+    }
+    eprint!("\r\x1b[2K");
+    println!(
+        "scaling ({}): GPU frame time ~ spp^{:.2} (8-32 spp at 256x256), ~ pixels^{:.2} (128^2-512^2 at 8 spp)",
+        args.scene.display(),
+        fitted_exponent(&by_spp),
+        fitted_exponent(&by_pixels)
+    );
+    Ok(())
+}
+
+fn bench_gbuffer(args: &BenchArgs) -> Result<()> {
     use strata::bench::{time_gbuffer, BumpSetting};
     use strata::scene::BumpDerivative::{Analytic, CentralDifferences};
     let cornell = strata::load_scene(&args.scene)?;

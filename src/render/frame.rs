@@ -325,7 +325,7 @@ pub fn render_frame(
             secondary_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + 1]);
         }
         if let Some(timer) = &timer {
-            let ns = timer.read_ns()?;
+            let ns = timer.read_range_ns(0, count * TIMESTAMPS_PER_SAMPLE)?;
             for slot in 0..count {
                 let t = &ns[(slot * TIMESTAMPS_PER_SAMPLE) as usize..];
                 times.tlas_ms += (t[1] - t[0]) / 1e6;
@@ -333,7 +333,7 @@ pub fn render_frame(
                 times.accumulate_ms += (t[3] - t[2]) / 1e6;
             }
             if last {
-                let r = &ns[(batch * TIMESTAMPS_PER_SAMPLE) as usize..];
+                let r = timer.read_range_ns(batch * TIMESTAMPS_PER_SAMPLE, 2)?;
                 times.resolve_ms += (r[1] - r[0]) / 1e6;
             }
         }

@@ -57,8 +57,18 @@ impl RayProbe {
 
     /// Casts `rays` against `tlas` and returns one hit record per ray.
     pub fn cast(&self, tlas: &AccelerationStructure, rays: &[ProbeRay]) -> Result<Vec<ProbeHit>> {
+        Ok(self.cast_timed(tlas, rays, None)?.0)
+    }
+
+    /// Like [`RayProbe::cast`], and with `timer` (two free queries) also the dispatch's GPU time in ms.
+    pub fn cast_timed(
+        &self,
+        tlas: &AccelerationStructure,
+        rays: &[ProbeRay],
+        timer: Option<&crate::vk::timer::TimestampPool>,
+    ) -> Result<(Vec<ProbeHit>, f64)> {
         if rays.is_empty() {
-            return Ok(Vec::new());
+            return Ok((Vec::new(), 0.0));
         }
         if rays.len() > u32::MAX as usize / 2 {
             bail!("{} rays is too many for one probe", rays.len());
@@ -76,17 +86,33 @@ impl RayProbe {
         let set = self.pipeline.new_descriptor_set("ray probe set")?;
         set.acceleration_structure(0, tlas.raw).storage_buffer(1, &ray_buffer).storage_buffer(2, &hit_buffer);
         let count = rays.len() as u32;
+        if let Some(timer) = timer {
+            timer.reset();
+        }
         submit_and_wait(device, "ray probe", |cmd| {
+            if let Some(timer) = timer {
+                timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, 0);
+            }
             labelled(device, cmd, "ray probe pass", || {
                 self.pipeline.bind(cmd, Some(&set), bytemuck::bytes_of(&count));
                 unsafe { device.raw.cmd_dispatch(cmd, count.div_ceil(LOCAL_SIZE), 1, 1) };
             });
+            if let Some(timer) = timer {
+                timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, 1);
+            }
             buffer_barrier(device, cmd, &hit_buffer, Access::COMPUTE_WRITE, Access::HOST_READ);
             Ok(())
         })?;
         let mut hits: Vec<ProbeHit> = hit_buffer.read()?;
         hits.truncate(rays.len());
-        Ok(hits)
+        let ms = match timer {
+            Some(timer) => {
+                let t = timer.read_ns()?;
+                (t[1] - t[0]) / 1e6
+            }
+            None => 0.0,
+        };
+        Ok((hits, ms))
     }
 }
 

@@ -35,11 +35,19 @@ impl TimestampPool {
 
     /// All timestamps in nanoseconds (after the work that wrote them has completed).
     pub fn read_ns(&self) -> Result<Vec<f64>> {
-        let mut ticks = vec![0u64; self.count as usize];
+        self.read_range_ns(0, self.count)
+    }
+
+    /// Timestamps `first..first + count` in nanoseconds; each must have been written.
+    pub fn read_range_ns(&self, first: u32, count: u32) -> Result<Vec<f64>> {
+        if first + count > self.count {
+            bail!("timestamps {first}..{} of a pool of {}", first + count, self.count);
+        }
+        let mut ticks = vec![0u64; count as usize];
         unsafe {
             self.device.raw.get_query_pool_results(
                 self.raw,
-                0,
+                first,
                 &mut ticks,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
             )
