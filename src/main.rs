@@ -23,11 +23,16 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Render a scene to a PNG (8-bit sRGB) or OpenEXR (32-bit float linear RGBA) file.
-    #[command(after_help = "The output format follows the extension of -o (.png or .exr). The file is written \
-                            atomically: if anything fails, nothing is left at the destination.\n\n\
-                            Examples:\n  strata render Box.gltf -o box.png\n  \
-                            strata render Box.gltf -o box.exr --size 512x512 --device llvmpipe --validate")]
+    /// Render a scene with distributed ray tracing (depth of field, motion blur, soft shadows, gloss,
+    /// translucency) to a PNG (8-bit sRGB, tone-mapped) or OpenEXR (32-bit float linear radiance) file.
+    #[command(after_help = "Each of the --spp samples rasterizes a G-buffer at its own lens point, shutter time and \
+                            sub-pixel jitter, then a compute pass casts shadow, gloss and translucency rays with \
+                            ray queries. The output format follows the extension of -o (.png or .exr); files are \
+                            written atomically, so a failed or interrupted render (Ctrl-C) leaves nothing behind.\n\n\
+                            Examples:\n  strata render scenes/showcase.toml -o showcase.png\n  \
+                            strata render scenes/dof.toml -o dof.png --spp 64 --aperture 0.05 --focus 3\n  \
+                            strata render scenes/motion.toml -o motion.exr --shutter 0:0.5 --sampler multi-jittered\n  \
+                            strata render Box.gltf -o box.png --size 512x512 --json --quiet --validate")]
     Render(RenderArgs),
     /// List every Vulkan device with its driver, API version and ray-query support, and whether the
     /// Khronos validation layer is installed.
