@@ -263,3 +263,57 @@ fn aovs_are_written_as_exr_layers_and_png_siblings() {
     let bad = strata(&["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--aov", "normals"]);
     assert!(!bad.status.success() && stderr(&bad).contains("unknown AOV \"normals\""));
 }
+
+#[test]
+fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
+    let dir = temp_dir("json");
+    let png = dir.join("soft.png");
+    let exr = dir.join("soft.exr");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/soft-shadows.toml");
+    let out = strata(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--exr",
+        exr.to_str().unwrap(),
+        "--size",
+        "64x40",
+        "--spp",
+        "4",
+        "--json",
+        "--quiet",
+        "--validate",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).trim().is_empty(), "--quiet prints nothing on stderr: {}", stderr(&out));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    assert_eq!(summary["spp"], 4);
+    assert_eq!(summary["width"], 64);
+    let shadow = summary["shadow_rays"].as_u64().unwrap();
+    // Every covered pixel of every sample casts at most one shadow ray per path vertex; the floor fills most.
+    assert!(shadow > 64 * 40 && shadow <= 64 * 40 * 4 * 4, "shadow rays {shadow}");
+    assert!(summary["rays_per_second"].as_f64().unwrap() > 0.0);
+    assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (64, 40));
+    assert!(exr.is_file());
+}
+
+#[test]
+fn ctrl_c_stops_the_render_and_writes_nothing() {
+    let dir = temp_dir("interrupt");
+    let png = dir.join("never.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
+    let child = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .args(["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "320x180", "--spp", "4096"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run strata");
+    // Let it load, upload and start sampling, then send SIGINT as a terminal's Ctrl-C would.
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill");
+    assert!(kill.success());
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.code(), Some(130), "stderr: {}", stderr(&out));
+    assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
+}
