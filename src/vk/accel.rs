@@ -111,69 +111,22 @@ impl AccelerationStructure {
             if records.is_empty() { vec![bytemuck::Zeroable::zeroed()] } else { records.clone() };
         // Instance data must be 16-byte aligned (VUID-vkCmdBuildAccelerationStructuresKHR-pInfos-03715).
         let instance_buffer = Buffer::with_data(device, &format!("{name} instances"), &bytes, BUILD_INPUT_USAGE, 16)?;
-        let instances_data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
-            .array_of_pointers(false)
-            .data(vk::DeviceOrHostAddressConstKHR { device_address: instance_buffer.address });
-        let geometry = [vk::AccelerationStructureGeometryKHR::default()
-            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
-            .geometry(vk::AccelerationStructureGeometryDataKHR { instances: instances_data })];
+        let geometry = [instances_geometry(instance_buffer.address)];
         Self::build(device, name, vk::AccelerationStructureTypeKHR::TOP_LEVEL, &geometry, &[records.len() as u32])
     }
 
-    pub(crate) fn build(
+    fn build(
         device: &Arc<Device>,
         name: &str,
         kind: vk::AccelerationStructureTypeKHR,
         geometries: &[vk::AccelerationStructureGeometryKHR<'_>],
         primitive_counts: &[u32],
     ) -> Result<Self> {
-        let mut build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-            .ty(kind)
-            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
-            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-            .geometries(geometries);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        unsafe {
-            device.accel.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &build_info,
-                primitive_counts,
-                &mut sizes,
-            )
-        };
-        let storage = Buffer::new(
-            device,
-            &format!("{name} storage"),
-            sizes.acceleration_structure_size,
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-            256, // VUID-VkAccelerationStructureCreateInfoKHR-offset-03734: offset multiple of 256
-        )?;
-        let create_info = vk::AccelerationStructureCreateInfoKHR::default()
-            .buffer(storage.raw)
-            .size(sizes.acceleration_structure_size)
-            .ty(kind);
-        let raw = unsafe { device.accel.create_acceleration_structure(&create_info, None) }
-            .with_context(|| format!("vkCreateAccelerationStructureKHR \"{name}\""))?;
-        device.set_name(raw, name);
-        let address = unsafe {
-            device.accel.get_acceleration_structure_device_address(
-                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
-            )
-        };
-        let structure = Self { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() };
-
-        let scratch_alignment = device.limits.min_scratch_offset_alignment;
-        let scratch = Buffer::new(
-            device,
-            &format!("{name} scratch"),
-            sizes.build_scratch_size.max(1),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-            scratch_alignment,
-        )?;
-        build_info = build_info
-            .dst_acceleration_structure(raw)
+        let sizes = build_sizes(device, kind, geometries, primitive_counts);
+        let structure = Self::allocate(device, name, kind, sizes.acceleration_structure_size)?;
+        let scratch = scratch_buffer(device, name, sizes.build_scratch_size)?;
+        let build_info = build_info(kind, geometries)
+            .dst_acceleration_structure(structure.raw)
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address });
         let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = primitive_counts
             .iter()
@@ -196,6 +149,80 @@ impl AccelerationStructure {
         drop(scratch);
         Ok(structure)
     }
+
+    /// An unbuilt structure of `kind` with `size` bytes of storage, named both ways.
+    fn allocate(device: &Arc<Device>, name: &str, kind: vk::AccelerationStructureTypeKHR, size: u64) -> Result<Self> {
+        let storage = Buffer::new(
+            device,
+            &format!("{name} storage"),
+            size,
+            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+            MemoryLocation::GpuOnly,
+            256, // VUID-VkAccelerationStructureCreateInfoKHR-offset-03734: offset multiple of 256
+        )?;
+        let create_info = vk::AccelerationStructureCreateInfoKHR::default().buffer(storage.raw).size(size).ty(kind);
+        let raw = unsafe { device.accel.create_acceleration_structure(&create_info, None) }
+            .with_context(|| format!("vkCreateAccelerationStructureKHR \"{name}\""))?;
+        device.set_name(raw, name);
+        let address = unsafe {
+            device.accel.get_acceleration_structure_device_address(
+                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
+            )
+        };
+        Ok(Self { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() })
+    }
+}
+
+/// What every build here asks for: a full build, tuned for tracing.
+fn build_info<'a>(
+    kind: vk::AccelerationStructureTypeKHR,
+    geometries: &'a [vk::AccelerationStructureGeometryKHR<'a>],
+) -> vk::AccelerationStructureBuildGeometryInfoKHR<'a> {
+    vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(kind)
+        .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(geometries)
+}
+
+fn build_sizes(
+    device: &Device,
+    kind: vk::AccelerationStructureTypeKHR,
+    geometries: &[vk::AccelerationStructureGeometryKHR<'_>],
+    primitive_counts: &[u32],
+) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    unsafe {
+        device.accel.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &build_info(kind, geometries),
+            primitive_counts,
+            &mut sizes,
+        )
+    };
+    sizes
+}
+
+/// Build scratch, aligned per the device's `minAccelerationStructureScratchOffsetAlignment`.
+fn scratch_buffer(device: &Arc<Device>, name: &str, size: u64) -> Result<Buffer> {
+    Buffer::new(
+        device,
+        &format!("{name} scratch"),
+        size.max(1),
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+        MemoryLocation::GpuOnly,
+        device.limits.min_scratch_offset_alignment,
+    )
+}
+
+/// One geometry of tightly packed instance records at `address`.
+fn instances_geometry(address: vk::DeviceAddress) -> vk::AccelerationStructureGeometryKHR<'static> {
+    let instances = vk::AccelerationStructureGeometryInstancesDataKHR::default()
+        .array_of_pointers(false)
+        .data(vk::DeviceOrHostAddressConstKHR { device_address: address });
+    vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { instances })
 }
 
 /// A TLAS rebuilt many times over the same instances at different transforms (one rebuild per sample time in
@@ -226,61 +253,11 @@ impl DynamicTlas {
             MemoryLocation::CpuToGpu,
             16,
         )?;
-        let geometry = [Self::geometry(instances.address)];
-        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
-            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
-            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-            .geometries(&geometry);
-        let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
-        unsafe {
-            device.accel.get_acceleration_structure_build_sizes(
-                vk::AccelerationStructureBuildTypeKHR::DEVICE,
-                &build_info,
-                &[instance_count],
-                &mut sizes,
-            )
-        };
-        let storage = Buffer::new(
-            device,
-            &format!("{name} storage"),
-            sizes.acceleration_structure_size,
-            vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-            256,
-        )?;
-        let create_info = vk::AccelerationStructureCreateInfoKHR::default()
-            .buffer(storage.raw)
-            .size(sizes.acceleration_structure_size)
-            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL);
-        let raw = unsafe { device.accel.create_acceleration_structure(&create_info, None) }
-            .with_context(|| format!("vkCreateAccelerationStructureKHR \"{name}\""))?;
-        device.set_name(raw, name);
-        let address = unsafe {
-            device.accel.get_acceleration_structure_device_address(
-                &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(raw),
-            )
-        };
-        let structure =
-            AccelerationStructure { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() };
-        let scratch = Buffer::new(
-            device,
-            &format!("{name} scratch"),
-            sizes.build_scratch_size.max(1),
-            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
-            MemoryLocation::GpuOnly,
-            device.limits.min_scratch_offset_alignment,
-        )?;
+        let kind = vk::AccelerationStructureTypeKHR::TOP_LEVEL;
+        let sizes = build_sizes(device, kind, &[instances_geometry(instances.address)], &[instance_count]);
+        let structure = AccelerationStructure::allocate(device, name, kind, sizes.acceleration_structure_size)?;
+        let scratch = scratch_buffer(device, name, sizes.build_scratch_size)?;
         Ok(Self { structure, scratch, instances, instance_count, slots, device: device.clone() })
-    }
-
-    fn geometry(address: vk::DeviceAddress) -> vk::AccelerationStructureGeometryKHR<'static> {
-        let instances_data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
-            .array_of_pointers(false)
-            .data(vk::DeviceOrHostAddressConstKHR { device_address: address });
-        vk::AccelerationStructureGeometryKHR::default()
-            .geometry_type(vk::GeometryTypeKHR::INSTANCES)
-            .geometry(vk::AccelerationStructureGeometryDataKHR { instances: instances_data })
     }
 
     /// Writes the instances of `slot` (the GPU must not be reading that slot).
@@ -303,12 +280,8 @@ impl DynamicTlas {
     /// queries in compute shaders. The caller orders it after earlier readers of the TLAS.
     pub fn record_build(&self, cmd: vk::CommandBuffer, slot: u32) {
         let offset = u64::from(slot) * u64::from(self.instance_count.max(1)) * INSTANCE_RECORD_SIZE;
-        let geometry = [Self::geometry(self.instances.address + offset)];
-        let build_info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
-            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
-            .flags(vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE)
-            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
-            .geometries(&geometry)
+        let geometry = [instances_geometry(self.instances.address + offset)];
+        let build_info = build_info(vk::AccelerationStructureTypeKHR::TOP_LEVEL, &geometry)
             .dst_acceleration_structure(self.structure.raw)
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: self.scratch.address });
         let ranges = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(self.instance_count)];
