@@ -89,7 +89,7 @@ pub fn time_gbuffer(
         timer.reset();
         submit_and_wait(device, "gbuffer bench sample", |cmd| {
             timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, 0);
-            pass.record(cmd, &gbuffer, gpu_scene, &inputs, &sample, crate::vk::commands::Access::NONE);
+            pass.record(cmd, &gbuffer, &inputs, 0, &sample, crate::vk::commands::Access::NONE);
             timer.write(cmd, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, 1);
             Ok(())
         })?;

@@ -82,7 +82,7 @@ pub fn render_aovs(
     let mut camera = scene.camera_at(scene.shutter.0);
     camera.lens.aperture_radius = 0.0;
     let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO);
-    let frame = pass.render_to_host(&gbuffer, &on_gpu.geometry, &inputs, &sample)?;
+    let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
     aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame)?))).collect()
 }
 

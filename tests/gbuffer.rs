@@ -57,7 +57,7 @@ fn render(gpu: &common::GpuTest, pass: &GBufferPass, scene: &Scene, size: (u32, 
     let materials = pass.materials(scene, &textures).unwrap();
     let inputs = pass.inputs(scene, &gpu_scene, &textures, &materials, &transforms).unwrap();
     let sample = camera_sample(scene.camera.as_ref().unwrap(), size.0, size.1, lens_uv, Vec2::ZERO);
-    pass.render_to_host(&gbuffer, &gpu_scene, &inputs, &sample).unwrap()
+    pass.render_to_host(&gbuffer, &inputs, &sample).unwrap()
 }
 
 #[test]

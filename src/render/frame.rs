@@ -5,7 +5,7 @@
 use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass};
 use super::accumulate_layout::{AccumulatePush, GpuLight, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferPass};
-use super::lights::{rest_transforms, LightSet};
+use super::lights::LightSet;
 use super::ray_scene::RayScene;
 use super::resolve::ResolvePass;
 use super::SceneOnGpu;
@@ -166,9 +166,14 @@ pub fn render_frame(
     let display = Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?;
 
     // Lights per sample slot; the count can only shrink over the shutter (degenerate triangles drop out).
-    let rest = rest_transforms(scene);
+    let rest = scene.node_world_transforms(None);
     let radius = scene.bounds().map(|(lo, hi)| (hi - lo).length() * 0.5).unwrap_or(1.0);
-    let first_lights = LightSet::at(scene, scene.shutter.0, &rest, radius);
+    let lights_at = |t: f32| {
+        let moved = scene.node_world_transforms(Some(t));
+        let transforms = scene.instance_transforms_from(&moved);
+        (LightSet::at(scene, &moved, &transforms, &rest, radius), transforms)
+    };
+    let (first_lights, _) = lights_at(scene.shutter.0);
     let light_capacity = (scene.lights.len() + first_lights.lights.len() - first_lights.analytic).max(1);
     let light_bytes = (light_capacity * std::mem::size_of::<GpuLight>()) as u64;
     let mut lights = Buffer::new(
@@ -187,6 +192,8 @@ pub fn render_frame(
         MemoryLocation::GpuToCpu,
         16,
     )?;
+    // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
+    let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
     let accumulate = AccumulatePass::new(device, texture_count)?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
@@ -218,13 +225,12 @@ pub fn render_frame(
         let count = batch.min(spp - done);
         // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
         let mut samples = Vec::with_capacity(count as usize);
-        let mut inputs = Vec::with_capacity(count as usize);
         for slot in 0..count {
             let index = done + slot;
             let (t, camera_sample, camera) = camera_sample_at(scene, settings, index);
-            let transforms = scene.instance_transforms_at(t);
+            // Node transforms once per sample: instances (TLAS, draws) and lights all come from them.
+            let (set, transforms) = lights_at(t);
             tlas.write_slot(slot, &ray_scene.tlas_instances(scene, &transforms))?;
-            let set = if t == scene.shutter.0 { first_lights.clone() } else { LightSet::at(scene, t, &rest, radius) };
             if set.skipped_triangles > 0 && !skipped_warned {
                 skipped_warned = true;
                 eprintln!(
@@ -235,7 +241,7 @@ pub fn render_frame(
             }
             let light_count = set.lights.len().min(light_capacity);
             lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
-            inputs.push(gbuffer_pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?);
+            draws.write_slot(slot, &transforms)?;
             let orthographic = matches!(camera.projection, Projection::Orthographic { .. });
             let forward = camera.world_from_camera.transform_vector3(-Vec3::Z).normalize_or_zero();
             let push = AccumulatePush {
@@ -263,7 +269,7 @@ pub fn render_frame(
         }
         let last = done + count == spp;
         submit_and_wait(device, "sample batch", |cmd| {
-            for (slot, ((camera_sample, push), inputs)) in samples.iter().zip(&inputs).enumerate() {
+            for (slot, (camera_sample, push)) in samples.iter().enumerate() {
                 let first = done == 0 && slot == 0;
                 let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
                     if let Some(timer) = &timer {
@@ -274,7 +280,7 @@ pub fn render_frame(
                 tlas.record_build(cmd, slot as u32);
                 stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
                 let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
-                gbuffer_pass.record(cmd, &gbuffer, &on_gpu.geometry, inputs, camera_sample, last_read);
+                gbuffer_pass.record(cmd, &gbuffer, &draws, slot as u32, camera_sample, last_read);
                 for image in &gbuffer.color {
                     image_barrier(
                         device,
@@ -337,7 +343,6 @@ pub fn render_frame(
                 times.resolve_ms += (r[1] - r[0]) / 1e6;
             }
         }
-        drop(inputs);
         done += count;
         if !progress(done, spp) && done < spp {
             return Err(Interrupted.into());

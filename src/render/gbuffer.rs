@@ -71,15 +71,39 @@ pub struct GBufferMaterials {
     pub(crate) buffer: Buffer,
 }
 
-/// The draws for one sample's time, ready to record. Borrows the frame's materials, which its descriptor set
-/// refers to.
+/// The draws of `slots` samples (each at its own time), ready to record: one host-visible buffer and one
+/// descriptor set for all of them, refilled per sample with `write_slot`. Borrows the frame's materials, which
+/// its descriptor set refers to.
 pub struct GBufferInputs<'m> {
-    // Kept alive while the descriptor set refers to it.
-    _draws: Buffer,
+    draws: Buffer,
+    geometry: &'m GpuScene,
     _materials: &'m GBufferMaterials,
     set: DescriptorSet,
-    /// (mesh, primitive) per draw record, in draw order.
+    /// (mesh, primitive) per draw, in draw order; the same in every slot.
     order: Vec<(usize, usize)>,
+    /// (instance, material) per draw, in draw order.
+    draw_of: Vec<(usize, u32)>,
+    slots: u32,
+}
+
+impl GBufferInputs<'_> {
+    /// Fills `slot` with the draws at instance transforms `transforms` (one per scene instance). The GPU must
+    /// not be reading that slot.
+    pub fn write_slot(&mut self, slot: u32, transforms: &[Mat4]) -> Result<()> {
+        if slot >= self.slots {
+            bail!("gbuffer draws: slot {slot} of {}", self.slots);
+        }
+        let records: Vec<GBufferDraw> = self
+            .draw_of
+            .iter()
+            .map(|&(instance, material)| {
+                let transform = transforms.get(instance).copied().unwrap_or(Mat4::ZERO);
+                GBufferDraw::new(transform, material, instance as u32)
+            })
+            .collect();
+        let offset = u64::from(slot) * (self.order.len() * std::mem::size_of::<GBufferDraw>()) as u64;
+        self.draws.write(offset, bytemuck::cast_slice(&records))
+    }
 }
 
 pub struct GBufferPass {
@@ -151,7 +175,7 @@ impl GBufferPass {
     pub fn inputs<'m>(
         &self,
         scene: &Scene,
-        gpu_scene: &GpuScene,
+        gpu_scene: &'m GpuScene,
         textures: &GpuTextures,
         materials: &'m GBufferMaterials,
         transforms: &[Mat4],
@@ -159,26 +183,44 @@ impl GBufferPass {
         if transforms.len() != scene.instances.len() {
             bail!("{} transforms for {} instances", transforms.len(), scene.instances.len());
         }
+        let mut inputs = self.inputs_for_slots(scene, gpu_scene, textures, materials, 1)?;
+        inputs.write_slot(0, transforms)?;
+        Ok(inputs)
+    }
+
+    /// Room for the draws of `slots` samples; fill each with `GBufferInputs::write_slot`.
+    pub fn inputs_for_slots<'m>(
+        &self,
+        scene: &Scene,
+        gpu_scene: &'m GpuScene,
+        textures: &GpuTextures,
+        materials: &'m GBufferMaterials,
+        slots: u32,
+    ) -> Result<GBufferInputs<'m>> {
         let default_material = scene.materials.len() as u32;
-        let mut records = Vec::new();
         let mut order = Vec::new();
-        for (i, (instance, transform)) in scene.instances.iter().zip(transforms).enumerate() {
+        let mut draw_of = Vec::new();
+        for (i, instance) in scene.instances.iter().enumerate() {
             for (p, primitive) in gpu_scene.meshes[instance.mesh].primitives.iter().enumerate() {
-                let material = primitive.material.map(|m| m as u32).unwrap_or(default_material);
-                records.push(GBufferDraw::new(*transform, material, i as u32));
+                draw_of.push((i, primitive.material.map(|m| m as u32).unwrap_or(default_material)));
                 order.push((instance.mesh, p));
             }
         }
-        if records.is_empty() {
-            records.push(bytemuck::Zeroable::zeroed());
-        }
-        let draws =
-            Buffer::with_data(&self.device, "gbuffer draws", &records, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+        let slots = slots.max(1);
+        let bytes = (order.len().max(1) * std::mem::size_of::<GBufferDraw>()) as u64 * u64::from(slots);
+        let draws = Buffer::new(
+            &self.device,
+            "gbuffer draws",
+            bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            crate::vk::MemoryLocation::CpuToGpu,
+            16,
+        )?;
         let set = self.pipeline.new_descriptor_set("gbuffer set")?;
         set.storage_buffer(0, &draws)
             .storage_buffer(1, &materials.buffer)
             .combined_image_samplers(2, &textures.bindings());
-        Ok(GBufferInputs { _draws: draws, _materials: materials, set, order })
+        Ok(GBufferInputs { draws, geometry: gpu_scene, _materials: materials, set, order, draw_of, slots })
     }
 
     /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
@@ -188,8 +230,8 @@ impl GBufferPass {
         &self,
         cmd: vk::CommandBuffer,
         gbuffer: &GBuffer,
-        gpu_scene: &GpuScene,
         inputs: &GBufferInputs,
+        slot: u32,
         sample: &CameraSample,
         last_read: Access,
     ) {
@@ -250,8 +292,9 @@ impl GBufferPass {
                 crate::vk::commands::set_full_viewport(device, cmd, extent);
             }
             self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
+            let first_draw = slot as usize * inputs.order.len();
             for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {
-                let primitive = &gpu_scene.meshes[mesh].primitives[p];
+                let primitive = &inputs.geometry.meshes[mesh].primitives[p];
                 let buffers = [
                     primitive.positions.raw,
                     primitive.normals.raw,
@@ -264,7 +307,7 @@ impl GBufferPass {
                     device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &[0; 6]);
                     device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
                     // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).
-                    device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, draw_index as u32);
+                    device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, (first_draw + draw_index) as u32);
                 }
             }
             unsafe { device.raw.cmd_end_rendering(cmd) };
@@ -275,13 +318,12 @@ impl GBufferPass {
     pub fn render_to_host(
         &self,
         gbuffer: &GBuffer,
-        gpu_scene: &GpuScene,
         inputs: &GBufferInputs,
         sample: &CameraSample,
     ) -> Result<GBufferFrame> {
         let device = &self.device;
         submit_and_wait(device, "gbuffer frame", |cmd| {
-            self.record(cmd, gbuffer, gpu_scene, inputs, sample, Access::NONE);
+            self.record(cmd, gbuffer, inputs, 0, sample, Access::NONE);
             Ok(())
         })?;
         let mut channels = Vec::new();

@@ -27,16 +27,12 @@ fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0)
 }
 
-/// Node world transforms at rest, for moving lights with their nodes (`LightSet::at` takes them once per frame).
-pub fn rest_transforms(scene: &Scene) -> Vec<Mat4> {
-    scene.node_world_transforms(None)
-}
-
 impl LightSet {
-    /// The lights at time `t`. `rest` are the node transforms at rest (`rest_transforms`); `scene_radius`
-    /// turns a directional light's irradiance into a power for selection.
-    pub fn at(scene: &Scene, t: f32, rest: &[Mat4], scene_radius: f32) -> Self {
-        let moved = scene.node_world_transforms(Some(t));
+    /// The lights at one time, from the node transforms at that time (`Scene::node_world_transforms`) and the
+    /// instance transforms they give (`Scene::instance_transforms_from`). `rest` are the node transforms at
+    /// rest (`node_world_transforms(None)`, once per frame); `scene_radius` turns a directional light's
+    /// irradiance into a power for selection.
+    pub fn at(scene: &Scene, moved: &[Mat4], transforms: &[Mat4], rest: &[Mat4], scene_radius: f32) -> Self {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
         for light in &scene.lights {
@@ -105,8 +101,7 @@ impl LightSet {
         }
         let analytic = lights.len();
         let mut skipped_triangles = 0;
-        let transforms = scene.instance_transforms_at(t);
-        'instances: for (instance, world) in scene.instances.iter().zip(&transforms) {
+        'instances: for (instance, world) in scene.instances.iter().zip(transforms) {
             let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
             for primitive in &scene.meshes[instance.mesh].primitives {
                 let Some(material) = primitive.material.and_then(|m| scene.materials.get(m)) else { continue };
@@ -174,10 +169,15 @@ mod tests {
     use super::*;
     use crate::scene::library;
 
+    fn lights_at_rest(scene: &Scene) -> LightSet {
+        let rest = scene.node_world_transforms(None);
+        LightSet::at(scene, &rest, &scene.instance_transforms_from(&rest), &rest, 1.0)
+    }
+
     #[test]
     fn the_cornell_ceiling_light_is_sampled_as_two_triangles_facing_down() {
         let scene = library::cornell();
-        let set = LightSet::at(&scene, 0.0, &rest_transforms(&scene), 1.0);
+        let set = lights_at_rest(&scene);
         let triangles: Vec<&GpuLight> =
             set.lights.iter().filter(|l| l.position_kind.w == light_kind::TRIANGLE).collect();
         assert_eq!(triangles.len(), 2);
@@ -193,7 +193,7 @@ mod tests {
     fn selection_follows_power() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/soft-shadows.toml");
         let scene = crate::scene::scene_file::load_scene_file(&path, None).expect("the committed scene loads").scene;
-        let set = LightSet::at(&scene, 0.0, &rest_transforms(&scene), 1.0);
+        let set = lights_at_rest(&scene);
         assert_eq!(set.analytic, set.lights.len());
         // Three area lights of 60 W each (radiance from power): equal power, equal probability.
         let areas: Vec<f32> = set

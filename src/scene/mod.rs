@@ -219,7 +219,14 @@ impl Scene {
 
     /// Each instance's world transform at time `t` (animation applied), in `instances` order.
     pub fn instance_transforms_at(&self, t: f32) -> Vec<Mat4> {
-        let world = self.node_world_transforms(Some(t));
-        self.instances.iter().map(|i| i.node.map(|n| world[n]).unwrap_or(i.world_from_object)).collect()
+        self.instance_transforms_from(&self.node_world_transforms(Some(t)))
+    }
+
+    /// Each instance's world transform given every node's (from `node_world_transforms`).
+    pub fn instance_transforms_from(&self, node_world: &[Mat4]) -> Vec<Mat4> {
+        self.instances
+            .iter()
+            .map(|i| i.node.and_then(|n| node_world.get(n).copied()).unwrap_or(i.world_from_object))
+            .collect()
     }
 }
