@@ -105,6 +105,15 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
     return f * ls.value / p;
 }
 
+// Turns the normals to the side the ray arrives from; arriving from behind means travelling inside.
+void face_viewer(inout Surface s, vec3 v) {
+    s.inside = dot(s.geometric, v) < 0.0;
+    if (s.inside) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
+    }
+}
+
 Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     Surface s;
     vec4 pos = texelFetch(gbuffer[0], p, 0);
@@ -120,17 +129,8 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     s.m.transmission = mat.z;
     s.m.ior = 1.0 + 3.0 * mat.w;
     s.m.specular = materials[material].emissive.w;
-    s.inside = dot(s.geometric, v) < 0.0;
-    if (s.inside) {
-        s.normal = -s.normal;
-        s.geometric = -s.geometric;
-    }
+    face_viewer(s, v);
     return s;
-}
-
-vec2 transform_uv(vec4 rows[2], vec2 uv) {
-    vec3 h = vec3(uv, 1.0);
-    return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
 }
 
 // The surface a ray query committed to, from the primitive's vertex streams (interpolated normal, base colour
@@ -180,11 +180,7 @@ Surface hit_surface(rayQueryEXT q, vec3 v) {
     s.m.transmission = m.transmission;
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
-    s.inside = dot(s.geometric, v) < 0.0;
-    if (s.inside) {
-        s.normal = -s.normal;
-        s.geometric = -s.geometric;
-    }
+    face_viewer(s, v);
     // Matches render/lights.rs: uniform-emission surfaces are lights, one-sided ones only from the front.
     bool sampled = m.emissive_texture < 0 && luminance(m.emissive.rgb) > 0.0 && (m.double_sided != 0 || !s.inside);
     s.emitter_density = sampled ? PI * luminance(m.emissive.rgb) * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;

@@ -23,11 +23,6 @@ layout(location = 4) out vec4 out_material;
 layout(location = 5) out vec4 out_emission;
 layout(location = 6) out uvec2 out_ids;
 
-vec2 transform_uv(vec4 rows[2], vec2 uv) {
-    vec3 h = vec3(uv, 1.0);
-    return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
-}
-
 void main() {
     GBufferDraw d = draws[in_draw];
     GpuMaterial m = materials[d.material];

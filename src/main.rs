@@ -371,7 +371,7 @@ fn render(args: RenderArgs) -> Result<()> {
         width: settings.width,
         height: settings.height,
         spp: if args.preview { 1 } else { settings.spp },
-        sampler: if args.preview { "preview" } else { sampler_name(settings.sampler) },
+        sampler: if args.preview { "preview" } else { settings.sampler.name() },
         seed: settings.seed,
         seconds,
         stats: match &picture {
@@ -389,16 +389,6 @@ fn render(args: RenderArgs) -> Result<()> {
         eprintln!("{}", summary.line());
     }
     Ok(())
-}
-
-fn sampler_name(kind: strata::scene::settings::SamplerKind) -> &'static str {
-    use strata::scene::settings::SamplerKind::*;
-    match kind {
-        Regular => "regular",
-        Random => "random",
-        Jittered => "jittered",
-        MultiJittered => "multi-jittered",
-    }
 }
 
 /// What a render produced: the distributed-ray-traced frame, or the raster preview.
@@ -484,12 +474,11 @@ impl Summary {
 struct ProgressBar {
     enabled: bool,
     started: std::time::Instant,
-    drawn: bool,
 }
 
 impl ProgressBar {
     fn new(enabled: bool) -> Self {
-        let bar = Self { enabled, started: std::time::Instant::now(), drawn: false };
+        let bar = Self { enabled, started: std::time::Instant::now() };
         if enabled {
             eprint!("\r[{}] 0 samples, starting ...", " ".repeat(30));
         }
@@ -509,14 +498,12 @@ impl ProgressBar {
             "=".repeat(filled),
             " ".repeat(30 - filled.min(30))
         );
-        self.drawn = true;
     }
 
     fn finish(&mut self) {
         if self.enabled {
             eprint!("\r\x1b[2K");
         }
-        self.drawn = false;
     }
 }
 

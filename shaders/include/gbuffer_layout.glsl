@@ -41,6 +41,12 @@ struct GpuMaterial {
     Bump bump;               // kind BUMP_NONE: no bump
 };
 
+// A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.
+vec2 transform_uv(vec4 rows[2], vec2 uv) {
+    vec3 h = vec3(uv, 1.0);
+    return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
+}
+
 #ifndef GBUFFER_LAYOUT_STRUCTS_ONLY
 layout(set = 0, binding = 0, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
 layout(set = 0, binding = 1, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };

@@ -18,6 +18,27 @@ pub fn all() -> Vec<(&'static str, Scene)> {
     ]
 }
 
+/// Adds `primitive` (its surface derivatives computed) as a mesh of its own, placed by a root node of its own;
+/// returns the node's index (what motion refers to).
+pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from_object: Mat4) -> usize {
+    compute_surface_derivatives(&mut primitive);
+    scene.meshes.push(Mesh { name: name.into(), primitives: vec![primitive] });
+    let mesh = scene.meshes.len() - 1;
+    let node = scene.nodes.len();
+    scene.nodes.push(Node {
+        name: name.into(),
+        parent: None,
+        children: Vec::new(),
+        transform: NodeTransform::Matrix(world_from_object),
+        mesh: Some(mesh),
+        camera: None,
+        light: None,
+    });
+    scene.roots.push(node);
+    scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
+    node
+}
+
 struct Builder {
     scene: Scene,
 }
@@ -41,22 +62,8 @@ impl Builder {
         self.scene.materials.len() - 1
     }
 
-    fn place(&mut self, name: &str, mut primitive: Primitive, world_from_object: Mat4) {
-        compute_surface_derivatives(&mut primitive);
-        self.scene.meshes.push(Mesh { name: name.into(), primitives: vec![primitive] });
-        let mesh = self.scene.meshes.len() - 1;
-        let node = self.scene.nodes.len();
-        self.scene.nodes.push(Node {
-            name: name.into(),
-            parent: None,
-            children: Vec::new(),
-            transform: NodeTransform::Matrix(world_from_object),
-            mesh: Some(mesh),
-            camera: None,
-            light: None,
-        });
-        self.scene.roots.push(node);
-        self.scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
+    fn place(&mut self, name: &str, primitive: Primitive, world_from_object: Mat4) {
+        place(&mut self.scene, name, primitive, world_from_object);
     }
 
     fn finish(mut self) -> Scene {

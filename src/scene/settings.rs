@@ -19,6 +19,11 @@ pub enum SamplerKind {
 impl SamplerKind {
     pub const NAMES: [&'static str; 4] = ["regular", "random", "jittered", "multi-jittered"];
 
+    /// The name `parse` reads.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
     pub fn parse(name: &str) -> Result<Self> {
         Ok(match name {
             "regular" => Self::Regular,

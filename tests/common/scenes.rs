@@ -4,9 +4,10 @@ use std::sync::Arc;
 use strata::render::frame::{render_frame, FrameOptions, RenderedFrame};
 use strata::render::SceneOnGpu;
 use strata::scene::camera::{look_at, Lens};
+#[allow(unused_imports)] // Only the tests that build scenes use it.
+pub use strata::scene::library::place;
 use strata::scene::settings::{RenderSettings, SamplerKind, ToneMap};
-use strata::scene::surface::compute_surface_derivatives;
-use strata::scene::{Camera, Instance, Material, Mesh, Node, NodeTransform, Primitive, Projection, Scene};
+use strata::scene::{Camera, Material, Primitive, Projection, Scene};
 use strata::vk::Device;
 
 /// A white-ish Lambertian surface without a specular lobe (KHR_materials_specular factor 0), so its radiance is
@@ -45,26 +46,6 @@ pub fn metal(scene: &mut Scene, roughness: f32) -> usize {
         ..Default::default()
     });
     scene.materials.len() - 1
-}
-
-/// Places `primitive` with its own node; returns the node index (for motion).
-pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from_object: Mat4) -> usize {
-    compute_surface_derivatives(&mut primitive);
-    scene.meshes.push(Mesh { name: name.into(), primitives: vec![primitive] });
-    let mesh = scene.meshes.len() - 1;
-    let node = scene.nodes.len();
-    scene.nodes.push(Node {
-        name: name.into(),
-        parent: None,
-        children: Vec::new(),
-        transform: NodeTransform::Matrix(world_from_object),
-        mesh: Some(mesh),
-        camera: None,
-        light: None,
-    });
-    scene.roots.push(node);
-    scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
-    node
 }
 
 /// A plane of `size` (x by z) facing +Y (or −Y when `facing_down`), centred at `center`.
