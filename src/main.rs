@@ -110,10 +110,10 @@ struct RenderArgs {
     #[arg(long, value_name = "S")]
     seed: Option<u64>,
     /// Thin-lens aperture radius in metres; 0 is a pinhole (everything sharp) [default: the scene's camera].
-    #[arg(long, value_name = "METRES", value_parser = parse_non_negative)]
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
     aperture: Option<f32>,
     /// Distance in metres of the plane in focus [default: the scene's camera].
-    #[arg(long, value_name = "METRES", value_parser = parse_non_negative)]
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
     focus: Option<f32>,
     /// Shutter interval in seconds; motion during it blurs. OPEN:CLOSE with equal times is a still frame
     /// [default: the scene file's, else 0:0].
