@@ -1,6 +1,7 @@
 #version 460
 // The accumulation pass: distributed ray tracing (Cook, Porter and Carpenter 1984) on top of one G-buffer
-// sample. Per pixel: emission, direct light from one light sample chosen by power with a shadow ray query
+// sample, or (pc.primary_rays, the reference mode) of a primary ray traced per pixel through its own sub-pixel
+// point and lens point. Per pixel: emission, direct light from one light sample chosen by power with a shadow ray query
 // (soft shadows), then a specular chain of up to max_depth vertices whose directions are perturbed around the
 // ideal reflection or refraction by GGX (gloss, translucency), each with its own direct light. The sample's
 // radiance is added into the RGBA32F accumulation image (alpha: coverage).
@@ -28,12 +29,17 @@ layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLight lights[];
 layout(set = 0, binding = 6, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
 layout(set = 0, binding = 7) uniform sampler2D textures[];
 layout(set = 0, binding = 8, std430) buffer Counters { uint counters[]; };
+layout(set = 0, binding = 9, std430) readonly buffer Cameras { GpuCamera cameras[]; };
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec3Array { vec3 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec4Array { vec4 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
 
-// Sampler dimensions (DESIGN.md: pixel, time, lens, light, then bounces); 0-2 are the camera's, on the host.
+// Sampler dimensions (DESIGN.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
+// host for the whole image, except pixel and lens in the reference mode (per pixel, here).
+const uint DIM_PIXEL = 0u;
+const uint DIM_LENS = 2u;
 const uint DIM_FIRST_VERTEX = 3u;
 const uint DIMS_PER_VERTEX = 5u;  // light pick, light point (2D), lobe choice, lobe direction (2D)
 
@@ -133,9 +139,11 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     return s;
 }
 
-// The surface a ray query committed to, from the primitive's vertex streams (interpolated normal, base colour
-// texture, emission; no bump: bump mapping lives in the G-buffer).
-Surface hit_surface(rayQueryEXT q, vec3 v) {
+// The surface a ray query committed to, from the primitive's vertex streams. `visible` (a primary ray of the
+// reference mode) evaluates it as the G-buffer pass does (gbuffer.frag): vertex colour, normal texture, Blinn
+// bump and double-sided faces turned to the viewer, so both modes agree. Deeper hits skip that detail: it costs
+// more than it shows after a gloss or translucency bounce.
+Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     int record = rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true);
     uint tri = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true));
     vec2 bc = rayQueryGetIntersectionBarycentricsEXT(q, true);
@@ -169,8 +177,38 @@ Surface hit_surface(rayQueryEXT q, vec3 v) {
 
     GpuMaterial m = materials[r.material];
     vec4 base = m.base_color;
+    if (visible) base *= w.x * Vec4Array(r.colors).v[i0] + w.y * Vec4Array(r.colors).v[i1] + w.z * Vec4Array(r.colors).v[i2];
     if (m.base_color_texture >= 0) {
         base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0);
+    }
+    if (visible) {
+        // Tangent vectors transform with the object matrix (gbuffer.vert).
+        Vec3Array dpdus = Vec3Array(r.dpdu);
+        Vec3Array dpdvs = Vec3Array(r.dpdv);
+        vec3 dpdu = m3 * (w.x * dpdus.v[i0] + w.y * dpdus.v[i1] + w.z * dpdus.v[i2]);
+        vec3 dpdv = m3 * (w.x * dpdvs.v[i0] + w.y * dpdvs.v[i1] + w.z * dpdvs.v[i2]);
+        vec3 n = s.normal;
+        // glTF 2.0 §3.9.3 normal texture, with the tangent frame of gbuffer.frag.
+        if (m.normal_texture >= 0) {
+            vec3 t = dpdu - n * dot(n, dpdu);
+            float t_len = length(t);
+            if (t_len > 1e-12) {
+                t /= t_len;
+                vec3 b = cross(n, t) * (dot(cross(dpdu, dpdv), n) < 0.0 ? -1.0 : 1.0);
+                vec3 tex = textureLod(textures[nonuniformEXT(m.normal_texture)], uv, 0.0).xyz * 2.0 - 1.0;
+                tex.xy *= m.normal_scale;
+                vec3 mapped = t * tex.x + b * tex.y + n * tex.z;
+                float mapped_len = length(mapped);
+                if (mapped_len > 0.0) n = mapped / mapped_len;
+            }
+        }
+        if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_height_and_gradient(m.bump, uv).yz);
+        s.normal = n;
+        // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
+        if (m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
+            s.normal = -s.normal;
+            s.geometric = -s.geometric;
+        }
     }
     s.emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], uv, 0.0).rgb;
@@ -247,7 +285,7 @@ vec3 shade(Surface s, vec3 v, uint pixel, inout uint shadow_rays, inout uint sec
             break;
         }
         v = -wi;
-        s = hit_surface(q, v);
+        s = hit_surface(q, v, false);
         float w = 1.0;
         if (pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
             float cos_light = abs(dot(s.geometric, wi));
@@ -257,6 +295,33 @@ vec3 shade(Surface s, vec3 v, uint pixel, inout uint shadow_rays, inout uint sec
         radiance += throughput * s.emission * w;
     }
     return radiance;
+}
+
+// The reference mode's primary ray for pixel p: through the point p + ½ − jitter of the image (the raster
+// pass's jitter convention, camera_sample in src/math/lens.rs) from a point on the thin lens, aimed so that the
+// plane at the focus distance stays sharp (DESIGN.md, "Thin lens"). t_range clips at the near and far depths,
+// as the raster pass does.
+void camera_ray(GpuCamera c, ivec2 p, vec2 jitter, vec2 lens_uv, out vec3 origin, out vec3 dir, out vec2 t_range) {
+    vec2 ndc = (vec2(p) + 0.5 - jitter) / vec2(pc.width, pc.height) * 2.0 - 1.0;
+    // View space: x right, y up (the image's y runs down), looking down -z.
+    vec2 plane = vec2(ndc.x, -ndc.y) * c.lens.xy;
+    vec3 o_view;
+    vec3 d_view;
+    if (c.range.z != 0.0) {
+        o_view = vec3(plane, 0.0);
+        d_view = vec3(0.0, 0.0, -1.0);
+    } else {
+        vec2 offset = c.lens.z > 0.0 ? concentric_disk(lens_uv) * c.lens.z : vec2(0.0);
+        o_view = vec3(offset, 0.0);
+        d_view = vec3(plane * c.lens.w, -c.lens.w) - o_view;
+    }
+    origin = (c.world_from_camera * vec4(o_view, 1.0)).xyz;
+    vec3 d = mat3(c.world_from_camera) * d_view;
+    float len = length(d);
+    dir = d / len;
+    // Depth along the view axis grows by -d_view.z / len per unit of t.
+    float depth_per_t = -d_view.z / len;
+    t_range = vec2(c.range.x / depth_per_t, min(c.range.y / depth_per_t, 1e30));
 }
 
 void main() {
@@ -270,13 +335,27 @@ void main() {
     }
     if (in_image) {
         uint pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
-        uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
         vec4 value = vec4(pc.background.rgb, 0.0);
-        if (ids.x != 0u) {
-            vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
-            vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
-            Surface s = gbuffer_surface(p, ids.y, v);
-            value = vec4(shade(s, v, pixel, shadow_rays, secondary_rays), 1.0);
+        if (pc.primary_rays != 0u) {
+            vec3 o;
+            vec3 d;
+            vec2 t_range;
+            camera_ray(cameras[pc.counter_slot], p, sample2(pixel, DIM_PIXEL) - 0.5, sample2(pixel, DIM_LENS), o, d, t_range);
+            rayQueryEXT q;
+            rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, t_range.x, d, t_range.y);
+            while (rayQueryProceedEXT(q)) {}
+            if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
+                Surface s = hit_surface(q, -d, true);
+                value = vec4(shade(s, -d, pixel, shadow_rays, secondary_rays), 1.0);
+            }
+        } else {
+            uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
+            if (ids.x != 0u) {
+                vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
+                vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
+                Surface s = gbuffer_surface(p, ids.y, v);
+                value = vec4(shade(s, v, pixel, shadow_rays, secondary_rays), 1.0);
+            }
         }
         // A sample that went wrong must not poison the pixel's whole estimate.
         if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);

@@ -123,7 +123,14 @@ pub struct FrameFigure {
 /// Renders `scene` at `width` × `height` with `spp` samples, timing every pass, then casts as many bare rays as
 /// the accumulation pass cast per sample (camera rays through jittered pixels, closest hit, no shading) at the
 /// scene's TLAS, for the driver's ray-query ceiling.
-pub fn time_frame(gpu: &Gpu, scene: &Scene, width: u32, height: u32, spp: u32, probe: bool) -> Result<FrameFigure> {
+pub fn time_frame(
+    gpu: &Gpu,
+    scene: &Scene,
+    (width, height): (u32, u32),
+    spp: u32,
+    primary: crate::scene::settings::Primary,
+    probe: bool,
+) -> Result<FrameFigure> {
     use crate::render::frame::{render_frame, FrameOptions};
     use crate::render::ray_probe::{ProbeRay, RayProbe};
     let device = &gpu.device;
@@ -134,6 +141,7 @@ pub fn time_frame(gpu: &Gpu, scene: &Scene, width: u32, height: u32, spp: u32, p
         height,
         spp,
         sampler: crate::scene::settings::SamplerKind::Jittered,
+        primary,
         ..Default::default()
     };
     let options = FrameOptions { timestamps: true, ..Default::default() };

@@ -125,6 +125,12 @@ struct RenderArgs {
     /// Tone map for the PNG: clamp (none), or filmic (an ACES fit) [default: the scene file's, else filmic].
     #[arg(long, value_name = "NAME", value_parser = parse_tone_map)]
     tone_map: Option<strata::scene::settings::ToneMap>,
+    /// Where each sample's visible surface comes from: raster (the G-buffer pass; fast, but each sample's pixel
+    /// jitter and lens point are shared by all pixels, so fine regular patterns can show moiré) or rays (a ray
+    /// per pixel with its own jitter and lens point: noise instead of moiré, the reference the raster mode is
+    /// tested against; the shutter time is still shared per sample) [default: the scene file's, else raster].
+    #[arg(long, value_name = "MODE", value_parser = parse_primary)]
+    primary: Option<strata::scene::settings::Primary>,
     /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
     /// 0.02,0.02,0.025].
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
@@ -162,6 +168,10 @@ use strata::scene::settings::MAX_SPP;
 
 fn parse_sampler(text: &str) -> Result<strata::scene::settings::SamplerKind, String> {
     strata::scene::settings::SamplerKind::parse(text).map_err(|e| e.to_string())
+}
+
+fn parse_primary(text: &str) -> Result<strata::scene::settings::Primary, String> {
+    strata::scene::settings::Primary::parse(text).map_err(|e| e.to_string())
 }
 
 fn parse_tone_map(text: &str) -> Result<strata::scene::settings::ToneMap, String> {
@@ -280,6 +290,7 @@ fn render(args: RenderArgs) -> Result<()> {
         background: args.background.map(glam::Vec3::from_array),
         exposure: args.exposure,
         tone_map: args.tone_map,
+        primary: args.primary,
         output: args.output.clone(),
     };
     if let Some(ev) = args.exposure {
@@ -372,6 +383,7 @@ fn render(args: RenderArgs) -> Result<()> {
         height: settings.height,
         spp: if args.preview { 1 } else { settings.spp },
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
+        primary: if args.preview { "raster" } else { settings.primary.name() },
         seed: settings.seed,
         seconds,
         stats: match &picture {
@@ -413,6 +425,8 @@ struct Summary {
     height: u32,
     spp: u32,
     sampler: &'static str,
+    /// Where visible surfaces came from: "raster" or "rays".
+    primary: &'static str,
     seed: u64,
     seconds: f64,
     stats: Option<strata::render::frame::FrameStats>,
@@ -422,33 +436,36 @@ struct Summary {
 }
 
 impl Summary {
-    fn rays(&self) -> (u64, u64) {
-        self.stats.as_ref().map(|s| (s.shadow_rays, s.secondary_rays)).unwrap_or((0, 0))
+    /// (camera rays, shadow rays, secondary rays).
+    fn rays(&self) -> (u64, u64, u64) {
+        self.stats.as_ref().map(|s| (s.camera_rays, s.shadow_rays, s.secondary_rays)).unwrap_or((0, 0, 0))
     }
 
     fn line(&self) -> String {
-        let (shadow, secondary) = self.rays();
+        let (camera, shadow, secondary) = self.rays();
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
+        let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
         format!(
-            "strata: wrote {} ({}x{}, {} spp {}, {} triangles) on {} in {:.2} s: {:.2} samples/s, {:.2} M rays/s \
-             ({} shadow + {} secondary rays)",
+            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+             {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
             self.written.join(" and "),
             self.width,
             self.height,
             self.spp,
             self.sampler,
+            self.primary,
             self.triangles,
             self.device,
             self.seconds,
             f64::from(self.spp) / render_seconds,
-            (shadow + secondary) as f64 / render_seconds / 1e6,
+            (camera + shadow + secondary) as f64 / render_seconds / 1e6,
             shadow,
             secondary
         )
     }
 
     fn json(&self) -> serde_json::Value {
-        let (shadow, secondary) = self.rays();
+        let (camera, shadow, secondary) = self.rays();
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
         serde_json::json!({
             "outputs": self.written,
@@ -456,13 +473,15 @@ impl Summary {
             "height": self.height,
             "spp": self.spp,
             "sampler": self.sampler,
+            "primary": self.primary,
             "seed": self.seed,
             "seconds": self.seconds,
             "render_seconds": render_seconds,
             "samples_per_second": f64::from(self.spp) / render_seconds,
+            "camera_rays": camera,
             "shadow_rays": shadow,
             "secondary_rays": secondary,
-            "rays_per_second": (shadow + secondary) as f64 / render_seconds,
+            "rays_per_second": (camera + shadow + secondary) as f64 / render_seconds,
             "device": self.device,
             "triangles": self.triangles,
             "instances": self.instances,
@@ -522,6 +541,7 @@ fn bench(args: BenchArgs) -> Result<()> {
 
 fn bench_frame(args: &BenchArgs) -> Result<()> {
     use strata::bench::{fitted_exponent, time_frame};
+    use strata::scene::settings::Primary;
     let gpu = Gpu::new(&GpuOptions { validation: false, echo_messages: false, device: args.device.clone() })?;
     let (w, h) = args.size;
     let pixels = f64::from(w) * f64::from(h);
@@ -535,7 +555,8 @@ fn bench_frame(args: &BenchArgs) -> Result<()> {
             scene.add_default_light();
         }
         eprint!("\r{} ...", path.display());
-        let f = time_frame(&gpu, &scene, w, h, args.spp, true)?;
+        let f = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, true)?;
+        let traced = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, false)?;
         eprint!("\r\x1b[2K");
         let s = &f.stats;
         let t = s.pass_times.unwrap_or_default();
@@ -574,6 +595,14 @@ fn bench_frame(args: &BenchArgs) -> Result<()> {
             f.probe_rays,
             100.0 * accumulate_rays_per_s / probe_rays_per_s
         );
+        let traced_times = traced.stats.pass_times.unwrap_or_default();
+        println!(
+            "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \
+             raster frame's GPU time, {:.1} bytes/pixel",
+            traced_times.accumulate_ms / n,
+            traced_times.total_ms() / total,
+            traced.stats.device_bytes.saturating_sub(traced.scene_bytes) as f64 / pixels
+        );
         println!(
             "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}; target < 100)",
             f.scene_bytes as f64 / 1048576.0,
@@ -590,13 +619,13 @@ fn bench_frame(args: &BenchArgs) -> Result<()> {
     let mut by_spp = Vec::new();
     for spp in [8u32, 16, 32] {
         eprint!("\rscaling: {spp} spp ...");
-        let f = time_frame(&gpu, &scene, 256, 256, spp, false)?;
+        let f = time_frame(&gpu, &scene, (256, 256), spp, Primary::Raster, false)?;
         by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     let mut by_pixels = Vec::new();
     for side in [128u32, 256, 512] {
         eprint!("\rscaling: {side}x{side} ...");
-        let f = time_frame(&gpu, &scene, side, side, 8, false)?;
+        let f = time_frame(&gpu, &scene, (side, side), 8, Primary::Raster, false)?;
         by_pixels.push((f64::from(side * side), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     eprint!("\r\x1b[2K");

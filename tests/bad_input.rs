@@ -175,6 +175,10 @@ fn every_bad_input_gives_its_error() {
             scene_file(&dir, "bad-sampler.toml", "[render]\nsampler = \"stratified\"\n"),
             "unknown sampler \"stratified\"",
         ),
+        (
+            scene_file(&dir, "bad-primary.toml", "[render]\nprimary = \"path\"\n"),
+            "unknown primary visibility \"path\" (one of: raster, rays)",
+        ),
         (scene_file(&dir, "bad-material.toml", "[[bump]]\nmaterial = \"marble\"\n"), "no material is named \"marble\""),
         (
             scene_file(&dir, "bad-node.toml", "[[motion]]\nnode = \"ghost\"\nvelocity = [1, 0, 0]\n"),

@@ -294,8 +294,46 @@ fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
     // Every covered pixel of every sample casts at most one shadow ray per path vertex; the floor fills most.
     assert!(shadow > 64 * 40 && shadow <= 64 * 40 * 4 * 4, "shadow rays {shadow}");
     assert!(summary["rays_per_second"].as_f64().unwrap() > 0.0);
+    assert_eq!(summary["primary"], "raster");
+    assert_eq!(summary["camera_rays"], 0, "the G-buffer pass rasterises primary visibility");
     assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (64, 40));
     assert!(exr.is_file());
+}
+
+#[test]
+fn primary_rays_are_traced_per_pixel_when_asked_and_a_wrong_mode_is_named() {
+    let dir = temp_dir("primary");
+    let png = dir.join("traced.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/dof.toml");
+    let (scene, png_arg) = (scene.to_str().unwrap(), png.to_str().unwrap());
+    let run = |mode: &str| {
+        strata(&[
+            "render",
+            scene,
+            "-o",
+            png_arg,
+            "--size",
+            "48x30",
+            "--spp",
+            "3",
+            "--json",
+            "--quiet",
+            "--validate",
+            "--primary",
+            mode,
+        ])
+    };
+    let out = run("rays");
+    assert!(out.status.success(), "{}", stderr(&out));
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    assert_eq!(summary["primary"], "rays");
+    assert_eq!(summary["camera_rays"], 48 * 30 * 3, "one camera ray per pixel and sample");
+    assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (48, 30));
+    std::fs::remove_file(&png).unwrap();
+    let out = run("pathtraced");
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("pathtraced") && stderr(&out).contains("raster, rays"), "{}", stderr(&out));
+    assert!(!png.exists(), "a refused render writes nothing");
 }
 
 #[test]

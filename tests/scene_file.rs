@@ -2,7 +2,7 @@
 //! settings layer defaults < scene file < command line.
 use glam::Vec3;
 use std::path::Path;
-use strata::scene::settings::{RenderSettings, SamplerKind, SettingsOverrides, ToneMap};
+use strata::scene::settings::{Primary, RenderSettings, SamplerKind, SettingsOverrides, ToneMap};
 use strata::scene::{LightShape, NoiseKind};
 
 fn load(name: &str) -> strata::LoadedScene {
@@ -100,6 +100,23 @@ fn settings_layer_defaults_then_file_then_command_line() {
     let both = file.clone().with(&cli);
     assert_eq!((both.width, both.height, both.spp), (100, 540, 4));
     assert_eq!(RenderSettings::default().with(&SettingsOverrides::default()), RenderSettings::default());
+    assert_eq!(file.primary, Primary::Raster, "the G-buffer pass is the default");
+    assert_eq!(
+        file.with(&SettingsOverrides { primary: Some(Primary::Rays), ..Default::default() }).primary,
+        Primary::Rays
+    );
+}
+
+#[test]
+fn the_render_table_chooses_traced_primary_rays() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("strata-primary-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("traced.toml");
+    let gltf = root.join("scenes/cornell.gltf");
+    std::fs::write(&path, format!("gltf = {:?}\n[render]\nprimary = \"rays\"\n", gltf.to_str().unwrap())).unwrap();
+    let loaded = strata::load(&path, &Default::default()).unwrap();
+    assert_eq!(loaded.settings.primary, Some(Primary::Rays));
 }
 
 #[test]

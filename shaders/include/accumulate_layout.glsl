@@ -24,10 +24,17 @@ struct GpuPrimitiveRecord {
     uint64_t normals;
     uint64_t uvs;
     uint64_t indices;
+    uint64_t colors;
+    uint64_t dpdu;
+    uint64_t dpdv;
     uint material;
     uint pad0;
-    uint pad1;
-    uint pad2;
+};
+
+struct GpuCamera {
+    mat4 world_from_camera;
+    vec4 lens;   // xy half image extent at distance 1 (or in metres, orthographic), z aperture, w focus distance
+    vec4 range;  // x near, y far, z 1 orthographic
 };
 
 layout(push_constant, std430) uniform AccumulatePush {
@@ -46,5 +53,6 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint counter_slot;
     uint max_depth;
     float total_light_power;  // the sum the selection probabilities were divided by
+    uint primary_rays;        // 1: trace each pixel's own primary ray instead of reading the G-buffer
 } pc;
 #endif

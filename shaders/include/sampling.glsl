@@ -108,6 +108,24 @@ vec2 sample_2d(uint kind, uint seed, uint pixel, uint index, uint count, uint di
                 (float(s / m) + (float(sx) + jy) / float(m)) / float(n));
 }
 
+// Concentric mapping of the unit square onto the unit disk (Shirley and Chiu 1997); GPU side of
+// math::lens::concentric_disk.
+vec2 concentric_disk(vec2 u) {
+    vec2 a = u * 2.0 - 1.0;
+    if (a == vec2(0.0)) return vec2(0.0);
+    const float QUARTER_PI = 0.78539816339744831;
+    float r;
+    float theta;
+    if (abs(a.x) > abs(a.y)) {
+        r = a.x;
+        theta = QUARTER_PI * (a.y / a.x);
+    } else {
+        r = a.y;
+        theta = 2.0 * QUARTER_PI - QUARTER_PI * (a.x / a.y);
+    }
+    return r * vec2(cos(theta), sin(theta));
+}
+
 float sample_1d(uint kind, uint seed, uint pixel, uint index, uint count, uint dimension) {
     count = max(count, 1u);
     uint k = sampling_key(seed, pixel, dimension);

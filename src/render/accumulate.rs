@@ -1,5 +1,5 @@
-//! The accumulation pass (`shaders/accumulate.comp`): one compute invocation per pixel reads the G-buffer, casts
-//! shadow, gloss and translucency rays with ray queries against the TLAS, and adds the sample's radiance into
+//! The accumulation pass (`shaders/accumulate.comp`): one compute invocation per pixel reads the G-buffer (or,
+//! in the reference mode, traces the pixel's own primary ray), casts shadow, gloss and translucency rays with ray queries against the TLAS, and adds the sample's radiance into
 //! the RGBA32F accumulation image.
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
@@ -35,6 +35,8 @@ pub struct AccumulateInputs<'a> {
     pub primitives: &'a Buffer,
     pub textures: &'a GpuTextures,
     pub counters: &'a Buffer,
+    /// One `GpuCamera` per sample slot (read in the reference mode).
+    pub cameras: &'a Buffer,
 }
 
 impl AccumulatePass {
@@ -49,6 +51,7 @@ impl AccumulatePass {
             Binding::new(6, vk::DescriptorType::STORAGE_BUFFER),
             Binding { binding: 7, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
             Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
         ];
         let pipeline = Pipeline::compute(
             device,
@@ -89,7 +92,8 @@ impl AccumulatePass {
             .storage_buffer(5, inputs.lights)
             .storage_buffer(6, inputs.primitives)
             .combined_image_samplers(7, &inputs.textures.bindings())
-            .storage_buffer(8, inputs.counters);
+            .storage_buffer(8, inputs.counters)
+            .storage_buffer(9, inputs.cameras);
         Ok(set)
     }
 

@@ -34,7 +34,7 @@ pub struct GpuLight {
     pub cone: Vec4,
 }
 
-/// What the shader needs to shade a secondary hit on a primitive: its vertex streams by device address
+/// What the shader needs to shade a ray's hit on a primitive: its vertex streams by device address
 /// (`GL_EXT_buffer_reference`) and its material. Indexed by the TLAS instance's custom index (its mesh's first
 /// record) plus the BLAS geometry index (the primitive within the mesh).
 #[repr(C)]
@@ -44,8 +44,27 @@ pub struct GpuPrimitiveRecord {
     pub normals: u64,
     pub uvs: u64,
     pub indices: u64,
+    /// Linear RGBA vertex colours (white without COLOR_0).
+    pub colors: u64,
+    /// Surface derivatives Q_u and Q_v (bump mapping's tangent frame, as the G-buffer pass reads them).
+    pub dpdu: u64,
+    pub dpdv: u64,
     pub material: u32,
-    pub pad: [u32; 3],
+    pub pad: u32,
+}
+
+/// One sample's camera for primary rays traced per pixel (`Primary::Rays`): the thin lens of DESIGN.md in the
+/// camera's own frame, which the shader maps to world space with `world_from_camera`'s columns.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuCamera {
+    /// The columns of world_from_camera (x right, y up, z back, w the lens centre).
+    pub world_from_camera: [Vec4; 4],
+    /// x, y: half the image's width and height on the plane at distance 1 (perspective) or in metres
+    /// (orthographic); z: aperture radius; w: focus distance.
+    pub lens: Vec4,
+    /// x: near, y: far clip distance (along the view axis); z: 1 for orthographic; w unused.
+    pub range: Vec4,
 }
 
 #[repr(C)]
@@ -76,6 +95,9 @@ pub struct AccumulatePush {
     /// The sum of the lights' selection powers (for the selection probability of an emissive triangle a
     /// gloss ray hits).
     pub total_light_power: f32,
+    /// 1: trace each pixel's primary ray (own jitter and lens point) instead of reading the G-buffer.
+    pub primary_rays: u32,
+    pub pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -103,9 +125,13 @@ mod tests {
     fn layouts_match_the_glsl_structs() {
         assert_eq!(size_of::<GpuLight>(), 96);
         assert_eq!(offset_of!(GpuLight, emission), 64);
-        assert_eq!(size_of::<GpuPrimitiveRecord>(), 48);
-        assert_eq!(offset_of!(GpuPrimitiveRecord, material), 32);
-        assert_eq!(size_of::<AccumulatePush>(), 96);
+        assert_eq!(size_of::<GpuPrimitiveRecord>(), 64);
+        assert_eq!(offset_of!(GpuPrimitiveRecord, dpdv), 48);
+        assert_eq!(offset_of!(GpuPrimitiveRecord, material), 56);
+        assert_eq!(size_of::<GpuCamera>(), 96);
+        assert_eq!(offset_of!(GpuCamera, range), 80);
+        assert_eq!(size_of::<AccumulatePush>(), 112);
+        assert_eq!(offset_of!(AccumulatePush, primary_rays), 96);
         assert_eq!(offset_of!(AccumulatePush, width), 48);
         assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
         assert_eq!(size_of::<ResolvePush>(), 32);

@@ -3,7 +3,7 @@
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
 use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass};
-use super::accumulate_layout::{AccumulatePush, GpuLight, COUNTERS_PER_SLOT};
+use super::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::lights::LightSet;
 use super::ray_scene::RayScene;
@@ -12,7 +12,7 @@ use super::SceneOnGpu;
 use crate::math::lens::{camera_sample, CameraSample};
 use crate::math::sampling::{sample_1d, sample_2d};
 use crate::output::Frame;
-use crate::scene::settings::{RenderSettings, SamplerKind};
+use crate::scene::settings::{Primary, RenderSettings, SamplerKind};
 use crate::scene::{Projection, Scene};
 use crate::vk::accel::DynamicTlas;
 use crate::vk::commands::{image_barrier, memory_barrier, submit_and_wait, Access};
@@ -21,7 +21,7 @@ use crate::vk::timer::TimestampPool;
 use crate::vk::{Buffer, Device, Image, MemoryLocation};
 use anyhow::{bail, Result};
 use ash::vk;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 /// Sampler dimensions the host draws once per sample for the whole image (DESIGN.md's order).
@@ -67,6 +67,8 @@ pub struct FrameStats {
     pub samples: u32,
     pub width: u32,
     pub height: u32,
+    /// Primary rays traced from the camera (the reference mode; 0 when the G-buffer pass rasterised them).
+    pub camera_rays: u64,
     pub shadow_rays: u64,
     pub secondary_rays: u64,
     /// Wall-clock seconds of the sample loop and resolve (not loading or uploading).
@@ -121,6 +123,27 @@ pub fn camera_sample_at(
     (t, sample, camera)
 }
 
+/// The camera the reference mode's primary rays start from (`camera_ray` in accumulate.comp).
+pub fn gpu_camera(camera: &crate::scene::Camera, width: u32, height: u32) -> GpuCamera {
+    let aspect = width as f32 / height as f32;
+    let m = camera.world_from_camera;
+    let (half, orthographic, near, far) = match camera.projection {
+        Projection::Perspective { yfov, znear, zfar } => {
+            let t = (yfov * 0.5).tan();
+            (Vec2::new(t * aspect, t), false, znear, zfar.unwrap_or(f32::MAX))
+        }
+        // The vertical extent is kept and the horizontal follows the image (Camera::clip_from_view).
+        Projection::Orthographic { ymag, znear, zfar, .. } => (Vec2::new(ymag * aspect, ymag), true, znear, zfar),
+    };
+    let (aperture, focus) =
+        if orthographic { (0.0, 1.0) } else { (camera.lens.aperture_radius, camera.lens.focus_distance) };
+    GpuCamera {
+        world_from_camera: [m.x_axis, m.y_axis, m.z_axis, m.w_axis],
+        lens: Vec4::new(half.x, half.y, aperture, focus),
+        range: Vec4::new(near, far, if orthographic { 1.0 } else { 0.0 }, 0.0),
+    }
+}
+
 /// Samples per submission: enough to keep the host out of the way, few enough for a lively progress bar.
 fn batch_size(pixels: u64, spp: u32) -> u32 {
     ((1u64 << 20) / pixels.max(1)).clamp(1, 8).min(u64::from(spp)) as u32
@@ -154,9 +177,11 @@ pub fn render_frame(
     let started = std::time::Instant::now();
     let extent = vk::Extent2D { width, height };
     let texture_count = on_gpu.textures.images.len() as u32;
+    let traced = settings.primary == Primary::Rays;
     let gbuffer_pass = GBufferPass::new(device, texture_count)?;
     let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
-    let gbuffer = GBuffer::new(device, width, height)?;
+    // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
+    let gbuffer = if traced { GBuffer::new(device, 1, 1)? } else { GBuffer::new(device, width, height)? };
     let ray_scene = RayScene::build(device, scene, &on_gpu.geometry, scene.materials.len() as u32)?;
     let batch = batch_size(u64::from(width) * u64::from(height), spp);
     let mut tlas = DynamicTlas::new(device, "scene TLAS", ray_scene.traced_instances.len() as u32, batch)?;
@@ -192,6 +217,15 @@ pub fn render_frame(
         MemoryLocation::GpuToCpu,
         16,
     )?;
+    let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
+    let mut cameras = Buffer::new(
+        device,
+        "sample cameras",
+        camera_bytes * u64::from(batch),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+        MemoryLocation::CpuToGpu,
+        16,
+    )?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
     let accumulate = AccumulatePass::new(device, texture_count)?;
@@ -204,6 +238,7 @@ pub fn render_frame(
         primitives: &ray_scene.records,
         textures: &on_gpu.textures,
         counters: &counters,
+        cameras: &cameras,
     })?;
     let resolve = ResolvePass::new(device)?;
     let resolve_set = resolve.descriptor_set(&accumulation, &display)?;
@@ -213,7 +248,8 @@ pub fn render_frame(
         None
     };
     let device_bytes = device.allocator().generate_report().total_allocated_bytes;
-    let image_bytes = u64::from(width) * u64::from(height) * (super::gbuffer_layout::bytes_per_pixel() as u64 + 16 + 4);
+    let gbuffer_bytes = if traced { 0 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
+    let image_bytes = u64::from(width) * u64::from(height) * (gbuffer_bytes + 16 + 4);
 
     let sampler = sampler_index(settings.sampler);
     let seed = seed32(settings.seed);
@@ -242,6 +278,7 @@ pub fn render_frame(
             let light_count = set.lights.len().min(light_capacity);
             lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
             draws.write_slot(slot, &transforms)?;
+            cameras.write(u64::from(slot) * camera_bytes, bytemuck::bytes_of(&gpu_camera(&camera, width, height)))?;
             let orthographic = matches!(camera.projection, Projection::Orthographic { .. });
             let forward = camera.world_from_camera.transform_vector3(-Vec3::Z).normalize_or_zero();
             let push = AccumulatePush {
@@ -260,6 +297,8 @@ pub fn render_frame(
                 counter_slot: slot,
                 max_depth: options.max_depth.max(1),
                 total_light_power: set.total_power,
+                primary_rays: u32::from(traced),
+                pad: [0; 3],
             };
             samples.push((camera_sample, push));
         }
@@ -279,16 +318,19 @@ pub fn render_frame(
                 stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
                 tlas.record_build(cmd, slot as u32);
                 stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
-                let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
-                gbuffer_pass.record(cmd, &gbuffer, &draws, slot as u32, camera_sample, last_read);
-                for image in &gbuffer.color {
-                    image_barrier(
-                        device,
-                        cmd,
-                        image,
-                        (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
-                        (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
-                    );
+                // The reference mode rasterises its one-texel stand-in once, so the set reads defined texels.
+                if !traced || first {
+                    let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
+                    gbuffer_pass.record(cmd, &gbuffer, &draws, slot as u32, camera_sample, last_read);
+                    for image in &gbuffer.color {
+                        image_barrier(
+                            device,
+                            cmd,
+                            image,
+                            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
+                            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
+                        );
+                    }
                 }
                 stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
                 if first {
@@ -355,6 +397,7 @@ pub fn render_frame(
         samples: spp,
         width,
         height,
+        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(spp) } else { 0 },
         shadow_rays,
         secondary_rays,
         seconds: started.elapsed().as_secs_f64(),

@@ -49,7 +49,7 @@ impl GpuScene {
                     vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | BUILD_INPUT_USAGE,
                     16,
                 )?;
-                // Normals and UVs are also read by address where rays hit (render::ray_scene).
+                // Every vertex stream is also read by address where rays hit (render::ray_scene).
                 let by_address = vk::BufferUsageFlags::VERTEX_BUFFER
                     | vk::BufferUsageFlags::STORAGE_BUFFER
                     | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
@@ -59,23 +59,12 @@ impl GpuScene {
                 let uvs = Buffer::device_local_with_data(device, &format!("{name} uvs"), &uv_data, by_address, 16)?;
                 let color_data =
                     if p.colors.is_empty() { vec![glam::Vec4::ONE; p.positions.len()] } else { p.colors.clone() };
-                let colors = Buffer::device_local_with_data(
-                    device,
-                    &format!("{name} colors"),
-                    &color_data,
-                    vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-                    16,
-                )?;
+                let colors =
+                    Buffer::device_local_with_data(device, &format!("{name} colors"), &color_data, by_address, 16)?;
                 let derivative = |name: &str, values: &[glam::Vec3]| {
                     let data =
                         if values.is_empty() { vec![glam::Vec3::ZERO; p.positions.len()] } else { values.to_vec() };
-                    Buffer::device_local_with_data(
-                        device,
-                        name,
-                        &data,
-                        vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER,
-                        16,
-                    )
+                    Buffer::device_local_with_data(device, name, &data, by_address, 16)
                 };
                 let dpdu = derivative(&format!("{name} dpdu"), &p.dpdu)?;
                 let dpdv = derivative(&format!("{name} dpdv"), &p.dpdv)?;

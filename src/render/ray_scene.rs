@@ -47,8 +47,11 @@ impl RayScene {
                     normals: p.normals.address,
                     uvs: p.uvs.address,
                     indices: p.indices.address,
+                    colors: p.colors.address,
+                    dpdu: p.dpdu.address,
+                    dpdv: p.dpdv.address,
                     material: p.material.map(|m| m as u32).unwrap_or(default_material),
-                    pad: [0; 3],
+                    pad: 0,
                 });
             }
             let blas = AccelerationStructure::build_blas(device, &format!("{} BLAS", mesh.name), &geometries)

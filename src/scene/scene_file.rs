@@ -5,7 +5,7 @@ use super::camera::{look_at, Lens};
 use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
-use super::settings::{SamplerKind, SettingsOverrides, ToneMap, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -97,6 +97,7 @@ struct RenderSection {
     background: Option<S<[f32; 3]>>,
     exposure: Option<S<f32>>,
     tone_map: Option<S<String>>,
+    primary: Option<S<String>>,
     output: Option<String>,
 }
 
@@ -594,6 +595,8 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         .transpose()?;
     let tone_map =
         r.tone_map.as_ref().map(|s| ToneMap::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
+    let primary =
+        r.primary.as_ref().map(|s| Primary::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
     let background = match &r.background {
         Some(b) => {
             let rgb = source.finite(b, "background")?;
@@ -613,6 +616,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         background,
         exposure: r.exposure.as_ref().map(|e| source.in_range(e, "exposure", -64.0, 64.0)).transpose()?,
         tone_map,
+        primary,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
 }

@@ -53,6 +53,32 @@ impl ToneMap {
     }
 }
 
+/// Where each sample's visible surface comes from (DESIGN.md, "One frame").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Primary {
+    /// The raster G-buffer pass: fast, but within one sample every pixel shares the pixel jitter and lens point.
+    Raster,
+    /// A ray query per pixel (the reference mode): each pixel draws its own jitter and lens point, so regular
+    /// patterns turn into noise instead of moiré. The shutter time stays shared (one TLAS per sample time).
+    Rays,
+}
+
+impl Primary {
+    pub const NAMES: [&'static str; 2] = ["raster", "rays"];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "raster" => Self::Raster,
+            "rays" => Self::Rays,
+            other => bail!("unknown primary visibility \"{other}\" (one of: {})", Self::NAMES.join(", ")),
+        })
+    }
+}
+
 /// Largest image side strata accepts before asking the device (which may allow less).
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest samples-per-pixel count accepted: more is a typo, not a render.
@@ -70,6 +96,7 @@ pub struct RenderSettings {
     /// Exposure in stops: radiance is scaled by 2^exposure before tone mapping.
     pub exposure: f32,
     pub tone_map: ToneMap,
+    pub primary: Primary,
     /// Default output path (the command line's `-o` wins).
     pub output: Option<PathBuf>,
 }
@@ -85,6 +112,7 @@ impl Default for RenderSettings {
             background: Vec3::new(0.02, 0.02, 0.025),
             exposure: 0.0,
             tone_map: ToneMap::Filmic,
+            primary: Primary::Raster,
             output: None,
         }
     }
@@ -101,6 +129,7 @@ pub struct SettingsOverrides {
     pub background: Option<Vec3>,
     pub exposure: Option<f32>,
     pub tone_map: Option<ToneMap>,
+    pub primary: Option<Primary>,
     pub output: Option<PathBuf>,
 }
 
@@ -116,6 +145,7 @@ impl RenderSettings {
         self.background = o.background.unwrap_or(self.background);
         self.exposure = o.exposure.unwrap_or(self.exposure);
         self.tone_map = o.tone_map.unwrap_or(self.tone_map);
+        self.primary = o.primary.unwrap_or(self.primary);
         self.output = o.output.or(self.output);
         self
     }

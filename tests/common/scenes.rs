@@ -76,6 +76,7 @@ pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> Rend
         background: Vec3::ZERO,
         exposure: 0.0,
         tone_map: ToneMap::Clamp,
+        primary: strata::scene::settings::Primary::Raster,
         output: None,
     }
 }
