@@ -1,6 +1,6 @@
 #version 460
 // The accumulation pass: distributed ray tracing (Cook, Porter and Carpenter 1984) on top of one G-buffer
-// sample, or (pc.primary_rays, the reference mode) of a primary ray traced per pixel through its own sub-pixel
+// sample, or (PRIMARY_RAYS, the reference mode) of a primary ray traced per pixel through its own sub-pixel
 // point and lens point. Per pixel: emission, direct light from one light sample chosen by power with a shadow ray query
 // (soft shadows), then a specular chain of up to max_depth vertices whose directions are perturbed around the
 // ideal reflection or refraction by GGX (gloss, translucency), each with its own direct light. The sample's
@@ -18,6 +18,10 @@
 #include "lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
+
+// 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
+// pipeline holds only its own path).
+layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 // position, shading normal, geometric normal, albedo, material, emission (gbuffer_layout.glsl).
@@ -336,7 +340,7 @@ void main() {
     if (in_image) {
         uint pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
         vec4 value = vec4(pc.background.rgb, 0.0);
-        if (pc.primary_rays != 0u) {
+        if (PRIMARY_RAYS != 0u) {
             vec3 o;
             vec3 d;
             vec2 t_range;

@@ -53,6 +53,5 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint counter_slot;
     uint max_depth;
     float total_light_power;  // the sum the selection probabilities were divided by
-    uint primary_rays;        // 1: trace each pixel's own primary ray instead of reading the G-buffer
 } pc;
 #endif

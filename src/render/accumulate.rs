@@ -40,7 +40,8 @@ pub struct AccumulateInputs<'a> {
 }
 
 impl AccumulatePass {
-    pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
+    /// `primary_rays`: trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
+    pub fn new(device: &Arc<Device>, texture_count: u32, primary_rays: bool) -> Result<Self> {
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
             Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: 6 },
@@ -53,12 +54,13 @@ impl AccumulatePass {
             Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
             Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
         ];
-        let pipeline = Pipeline::compute(
+        let pipeline = Pipeline::compute_specialized(
             device,
-            "accumulate pipeline",
+            if primary_rays { "accumulate pipeline (primary rays)" } else { "accumulate pipeline" },
             ("accumulate.comp", shaders::ACCUMULATE_COMP),
             &bindings,
             std::mem::size_of::<AccumulatePush>() as u32,
+            &[u32::from(primary_rays)],
         )?;
         let gbuffer_sampler = Sampler::new(
             device,

@@ -95,9 +95,6 @@ pub struct AccumulatePush {
     /// The sum of the lights' selection powers (for the selection probability of an emissive triangle a
     /// gloss ray hits).
     pub total_light_power: f32,
-    /// 1: trace each pixel's primary ray (own jitter and lens point) instead of reading the G-buffer.
-    pub primary_rays: u32,
-    pub pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -130,8 +127,7 @@ mod tests {
         assert_eq!(offset_of!(GpuPrimitiveRecord, material), 56);
         assert_eq!(size_of::<GpuCamera>(), 96);
         assert_eq!(offset_of!(GpuCamera, range), 80);
-        assert_eq!(size_of::<AccumulatePush>(), 112);
-        assert_eq!(offset_of!(AccumulatePush, primary_rays), 96);
+        assert_eq!(size_of::<AccumulatePush>(), 96);
         assert_eq!(offset_of!(AccumulatePush, width), 48);
         assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
         assert_eq!(size_of::<ResolvePush>(), 32);

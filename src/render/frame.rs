@@ -228,7 +228,7 @@ pub fn render_frame(
     )?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
-    let accumulate = AccumulatePass::new(device, texture_count)?;
+    let accumulate = AccumulatePass::new(device, texture_count, traced)?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
         gbuffer: &gbuffer,
@@ -297,8 +297,6 @@ pub fn render_frame(
                 counter_slot: slot,
                 max_depth: options.max_depth.max(1),
                 total_light_power: set.total_power,
-                primary_rays: u32::from(traced),
-                pad: [0; 3],
             };
             samples.push((camera_sample, push));
         }

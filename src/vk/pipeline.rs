@@ -129,6 +129,19 @@ impl Pipeline {
         bindings: &[Binding],
         push_constant_size: u32,
     ) -> Result<Self> {
+        Self::compute_specialized(device, name, shader, bindings, push_constant_size, &[])
+    }
+
+    /// A compute pipeline whose 32-bit specialization constants `constant_id = i` take `constants[i]`: the
+    /// driver compiles the branches they switch off out of the pipeline.
+    pub fn compute_specialized(
+        device: &Arc<Device>,
+        name: &str,
+        shader: (&str, &[u8]),
+        bindings: &[Binding],
+        push_constant_size: u32,
+        constants: &[u32],
+    ) -> Result<Self> {
         let module = ShaderModule::new(device, shader.0, shader.1)?;
         let (set_layout, layout) = Self::new_layout(device, name, bindings, push_constant_size)?;
         let mut pipeline = Self {
@@ -141,10 +154,18 @@ impl Pipeline {
             name: name.to_owned(),
             device: device.clone(),
         };
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
+            .collect();
+        let data: &[u8] = bytemuck::cast_slice(constants);
+        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(data);
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module.raw)
             .name(ENTRY);
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
         pipeline.raw = unsafe { device.raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
             .map_err(|(_, e)| anyhow!(e))
