@@ -18,6 +18,7 @@
 #include "lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
+const uint GROUP_SIZE = 64u;
 
 // 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
 // pipeline holds only its own path).
@@ -248,55 +249,85 @@ vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
     return result;
 }
 
-vec3 shade(Surface s, vec3 v, uint pixel, inout uint shadow_rays, inout uint secondary_rays) {
-    vec3 radiance = s.emission;
-    vec3 throughput = vec3(1.0);
-    for (uint depth = 0u; depth < pc.max_depth; depth++) {
-        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
-        radiance += throughput * direct_light(s, v, pixel, dim, shadow_rays);
-        if (depth + 1u >= pc.max_depth) break;
-        vec3 wi;
-        vec3 weight;
-        float pdf;
-        float u_lobe = sample1(pixel, dim + 3u);
-        if (!sample_specular(s.m, s.normal, v, s.inside, sample2(pixel, dim + 4u), u_lobe, wi, weight, pdf)) break;
-        throughput *= weight;
-        // Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
-        // Survival 4x the weight: weak reflections still end most paths, at a quarter of the variance.
-        float survive = min(1.0, 4.0 * max(throughput.x, max(throughput.y, throughput.z)));
-        if (survive < 1.0) {
-            float u = unit_float(pcg_hash(sampling_key(pc.seed, pixel, dim + 2u) ^ pcg_hash(pc.sample_index)));
-            if (u >= survive) break;
-            throughput /= survive;
-        }
+// Where a specular chain goes on from one vertex: the next ray and what it carries.
+struct ChainRay {
+    vec3 origin;
+    float pdf;  // solid-angle density of a reflection (for MIS), 0 for a refraction
+    vec3 dir;
+    uint pixel;
+    vec3 throughput;
+    uint lane;  // the invocation whose pixel it belongs to
+};
+
+// The workgroup's chain rays, packed: lavapipe runs 8 lanes in lockstep, so chains scattered over the
+// workgroup would keep every lane group looping; packed, only ceil(count / 8) groups follow them.
+shared uint group_chain_count;
+shared ChainRay group_chains[GROUP_SIZE];
+shared vec3 group_chain_radiance[GROUP_SIZE];
+
+// The next direction of the specular chain from vertex `depth` (GGX around the mirror or refracted direction),
+// then Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
+// Survival is 4x the weight: weak reflections still end most paths, at a quarter of the variance.
+bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
+    uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+    vec3 weight;
+    float u_lobe = sample1(r.pixel, dim + 3u);
+    if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + 4u), u_lobe, r.dir, weight, r.pdf)) {
+        return false;
+    }
+    r.throughput *= weight;
+    float survive = min(1.0, 4.0 * max(r.throughput.x, max(r.throughput.y, r.throughput.z)));
+    if (survive < 1.0) {
+        float u = unit_float(pcg_hash(sampling_key(pc.seed, r.pixel, dim + 2u) ^ pcg_hash(pc.sample_index)));
+        if (u >= survive) return false;
+        r.throughput /= survive;
+    }
+    r.origin = offset_origin(s.position, s.geometric, r.dir);
+    return true;
+}
+
+// The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
+vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
+    vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, shadow_rays);
+    r.throughput = vec3(1.0);
+    chain = pc.max_depth > 1u && next_chain_ray(s, v, 0u, r);
+    return radiance;
+}
+
+// The specular chain from vertex 1 on: each ray finds a light (MIS against light sampling), the background,
+// or a surface whose emission and one light sample it adds before going on.
+vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
+    vec3 radiance = vec3(0.0);
+    for (uint depth = 1u; depth < pc.max_depth; depth++) {
         secondary_rays++;
-        vec3 o = offset_origin(s.position, s.geometric, wi);
         rayQueryEXT q;
-        rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, 0.0, wi, 1e30);
+        rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, r.origin, 0.0, r.dir, 1e30);
         while (rayQueryProceedEXT(q)) {}
         bool hit = rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
         float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
         float light_density;
-        vec3 light = lights_along(o, wi, t_hit, light_density);
+        vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
         // A reflection (pdf > 0) that reaches a light shares it with light sampling; refraction has it alone.
         if (light != vec3(0.0)) {
-            float w = pdf > 0.0 ? power_heuristic(pdf, light_density) : 1.0;
-            radiance += throughput * light * w;
+            float w = r.pdf > 0.0 ? power_heuristic(r.pdf, light_density) : 1.0;
+            radiance += r.throughput * light * w;
             break;
         }
         if (!hit) {
-            radiance += throughput * pc.background.rgb;
+            radiance += r.throughput * pc.background.rgb;
             break;
         }
-        v = -wi;
-        s = hit_surface(q, v, false);
+        vec3 v = -r.dir;
+        Surface s = hit_surface(q, v, false);
         float w = 1.0;
-        if (pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
-            float cos_light = abs(dot(s.geometric, wi));
+        if (r.pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
+            float cos_light = abs(dot(s.geometric, r.dir));
             float density = cos_light > 0.0 ? s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power) : 0.0;
-            w = power_heuristic(pdf, density);
+            w = power_heuristic(r.pdf, density);
         }
-        radiance += throughput * s.emission * w;
+        radiance += r.throughput * s.emission * w;
+        radiance += r.throughput * direct_light(s, v, r.pixel, DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth, shadow_rays);
+        if (depth + 1u >= pc.max_depth || !next_chain_ray(s, v, depth, r)) break;
     }
     return radiance;
 }
@@ -331,26 +362,36 @@ void camera_ray(GpuCamera c, ivec2 p, vec2 jitter, vec2 lens_uv, out vec3 origin
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     bool in_image = gl_GlobalInvocationID.x < pc.width && gl_GlobalInvocationID.y < pc.height;
+    uint lane = gl_LocalInvocationIndex;
     uint shadow_rays = 0u;
     uint secondary_rays = 0u;
-    if (gl_LocalInvocationIndex == 0u) {
+    if (lane == 0u) {
         group_shadow_rays = 0u;
         group_secondary_rays = 0u;
+        group_chain_count = 0u;
     }
+    memoryBarrierShared();
+    barrier();
+
+    // The visible surface's own light; its chain ray, if any, joins the workgroup's packed list.
+    vec4 value = vec4(pc.background.rgb, 0.0);
+    bool chain = false;
+    ChainRay r;
+    r.pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
+    r.lane = lane;
     if (in_image) {
-        uint pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
-        vec4 value = vec4(pc.background.rgb, 0.0);
         if (PRIMARY_RAYS != 0u) {
             vec3 o;
             vec3 d;
             vec2 t_range;
-            camera_ray(cameras[pc.counter_slot], p, sample2(pixel, DIM_PIXEL) - 0.5, sample2(pixel, DIM_LENS), o, d, t_range);
+            camera_ray(cameras[pc.counter_slot], p, sample2(r.pixel, DIM_PIXEL) - 0.5, sample2(r.pixel, DIM_LENS), o, d,
+                       t_range);
             rayQueryEXT q;
             rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, t_range.x, d, t_range.y);
             while (rayQueryProceedEXT(q)) {}
             if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
                 Surface s = hit_surface(q, -d, true);
-                value = vec4(shade(s, -d, pixel, shadow_rays, secondary_rays), 1.0);
+                value = vec4(shade_visible(s, -d, r, chain, shadow_rays), 1.0);
             }
         } else {
             uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
@@ -358,21 +399,34 @@ void main() {
                 vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
                 vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
                 Surface s = gbuffer_surface(p, ids.y, v);
-                value = vec4(shade(s, v, pixel, shadow_rays, secondary_rays), 1.0);
+                value = vec4(shade_visible(s, v, r, chain, shadow_rays), 1.0);
             }
         }
+        if (chain) group_chains[atomicAdd(group_chain_count, 1u)] = r;
+    }
+    memoryBarrierShared();
+    barrier();
+
+    // The first group_chain_count lanes follow the chains, whichever pixels they came from.
+    if (lane < group_chain_count) {
+        ChainRay c = group_chains[lane];
+        group_chain_radiance[c.lane] = follow_chain(c, shadow_rays, secondary_rays);
+    }
+    memoryBarrierShared();
+    barrier();
+
+    if (in_image) {
+        if (chain) value.rgb += group_chain_radiance[lane];
         // A sample that went wrong must not poison the pixel's whole estimate.
         if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);
         vec4 sum = pc.sample_index == 0u ? vec4(0.0) : imageLoad(accumulation, p);
         imageStore(accumulation, p, sum + value);
     }
-    memoryBarrierShared();
-    barrier();
     atomicAdd(group_shadow_rays, shadow_rays);
     atomicAdd(group_secondary_rays, secondary_rays);
     memoryBarrierShared();
     barrier();
-    if (gl_LocalInvocationIndex == 0u) {
+    if (lane == 0u) {
         atomicAdd(counters[2u * pc.counter_slot], group_shadow_rays);
         atomicAdd(counters[2u * pc.counter_slot + 1u], group_secondary_rays);
     }
