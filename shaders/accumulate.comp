@@ -18,7 +18,7 @@
 #include "lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-const uint GROUP_SIZE = 64u;
+const uint GROUP_SIZE = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
 
 // 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
 // pipeline holds only its own path).
