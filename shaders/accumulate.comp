@@ -193,19 +193,9 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         vec3 dpdu = m3 * (w.x * dpdus.v[i0] + w.y * dpdus.v[i1] + w.z * dpdus.v[i2]);
         vec3 dpdv = m3 * (w.x * dpdvs.v[i0] + w.y * dpdvs.v[i1] + w.z * dpdvs.v[i2]);
         vec3 n = s.normal;
-        // glTF 2.0 §3.9.3 normal texture, with the tangent frame of gbuffer.frag.
         if (m.normal_texture >= 0) {
-            vec3 t = dpdu - n * dot(n, dpdu);
-            float t_len = length(t);
-            if (t_len > 1e-12) {
-                t /= t_len;
-                vec3 b = cross(n, t) * (dot(cross(dpdu, dpdv), n) < 0.0 ? -1.0 : 1.0);
-                vec3 tex = textureLod(textures[nonuniformEXT(m.normal_texture)], uv, 0.0).xyz * 2.0 - 1.0;
-                tex.xy *= m.normal_scale;
-                vec3 mapped = t * tex.x + b * tex.y + n * tex.z;
-                float mapped_len = length(mapped);
-                if (mapped_len > 0.0) n = mapped / mapped_len;
-            }
+            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], uv, 0.0).xyz;
+            n = normal_from_texture(n, dpdu, dpdv, texel, m.normal_scale);
         }
         if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_height_and_gradient(m.bump, uv).yz);
         s.normal = n;

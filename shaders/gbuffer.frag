@@ -43,21 +43,9 @@ void main() {
     if (n_len > 0.0 && dot(geometric, n) < 0.0) geometric = -geometric;
     if (!(n_len > 0.0)) n = geometric;
 
-    // A glTF normal texture (tangent space, glTF 2.0 §3.9.3) tilts the interpolated normal first; the tangent
-    // frame comes from the surface derivatives (T along Q_u, B = ±n x T with the sign of the UV orientation).
     if (m.normal_texture >= 0) {
-        vec3 nn = normalize(n);
-        vec3 t = in_dpdu - nn * dot(nn, in_dpdu);
-        float t_len = length(t);
-        if (t_len > 1e-12) {
-            t /= t_len;
-            vec3 b = cross(nn, t) * (dot(cross(in_dpdu, in_dpdv), nn) < 0.0 ? -1.0 : 1.0);
-            vec3 tex = texture(textures[nonuniformEXT(m.normal_texture)], in_uv).xyz * 2.0 - 1.0;
-            tex.xy *= m.normal_scale;
-            vec3 mapped = t * tex.x + b * tex.y + nn * tex.z;
-            float mapped_len = length(mapped);
-            if (mapped_len > 0.0) n = mapped / mapped_len;
-        }
+        vec3 texel = texture(textures[nonuniformEXT(m.normal_texture)], in_uv).xyz;
+        n = normal_from_texture(n, in_dpdu, in_dpdv, texel, m.normal_scale);
     }
     float height = 0.0;
     vec3 shading = normalize(n);

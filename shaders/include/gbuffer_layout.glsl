@@ -47,6 +47,23 @@ vec2 transform_uv(vec4 rows[2], vec2 uv) {
     return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
 }
 
+// A glTF normal texture (tangent space, glTF 2.0 §3.9.3) tilts the normal n by the texel `texel` (as stored, in
+// [0, 1]); the tangent frame comes from the surface derivatives (T along Q_u, B = ±n x T with the sign of the UV
+// orientation). Degenerate derivatives leave n as it was.
+vec3 normal_from_texture(vec3 n, vec3 dpdu, vec3 dpdv, vec3 texel, float scale) {
+    vec3 nn = normalize(n);
+    vec3 t = dpdu - nn * dot(nn, dpdu);
+    float t_len = length(t);
+    if (!(t_len > 1e-12)) return n;
+    t /= t_len;
+    vec3 b = cross(nn, t) * (dot(cross(dpdu, dpdv), nn) < 0.0 ? -1.0 : 1.0);
+    vec3 tex = texel * 2.0 - 1.0;
+    tex.xy *= scale;
+    vec3 mapped = t * tex.x + b * tex.y + nn * tex.z;
+    float mapped_len = length(mapped);
+    return mapped_len > 0.0 ? mapped / mapped_len : n;
+}
+
 #ifndef GBUFFER_LAYOUT_STRUCTS_ONLY
 layout(set = 0, binding = 0, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
 layout(set = 0, binding = 1, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };
