@@ -125,15 +125,14 @@ pub fn camera_sample_at(
 
 /// The camera the reference mode's primary rays start from (`camera_ray` in accumulate.comp).
 pub fn gpu_camera(camera: &crate::scene::Camera, width: u32, height: u32) -> GpuCamera {
-    let aspect = width as f32 / height as f32;
     let m = camera.world_from_camera;
-    let (half, orthographic, near, far) = match camera.projection {
-        Projection::Perspective { yfov, znear, zfar } => {
-            let t = (yfov * 0.5).tan();
-            (Vec2::new(t * aspect, t), false, znear, zfar.unwrap_or(f32::MAX))
-        }
-        // The vertical extent is kept and the horizontal follows the image (Camera::clip_from_view).
-        Projection::Orthographic { ymag, znear, zfar, .. } => (Vec2::new(ymag * aspect, ymag), true, znear, zfar),
+    // Half the image's extent, read off the raster pass's own projection (x_c = x / half_x, y_c = -y / half_y
+    // on the plane at distance 1, or in metres orthographically), so both modes frame the image alike.
+    let clip_from_view = camera.clip_from_view(width as f32 / height as f32);
+    let half = Vec2::new(1.0 / clip_from_view.x_axis.x, -1.0 / clip_from_view.y_axis.y);
+    let (orthographic, near, far) = match camera.projection {
+        Projection::Perspective { znear, zfar, .. } => (false, znear, zfar.unwrap_or(f32::MAX)),
+        Projection::Orthographic { znear, zfar, .. } => (true, znear, zfar),
     };
     let (aperture, focus) =
         if orthographic { (0.0, 1.0) } else { (camera.lens.aperture_radius, camera.lens.focus_distance) };
@@ -201,31 +200,15 @@ pub fn render_frame(
     let (first_lights, _) = lights_at(scene.shutter.0);
     let light_capacity = (scene.lights.len() + first_lights.lights.len() - first_lights.analytic).max(1);
     let light_bytes = (light_capacity * std::mem::size_of::<GpuLight>()) as u64;
-    let mut lights = Buffer::new(
-        device,
-        "lights",
-        light_bytes * u64::from(batch),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::CpuToGpu,
-        16,
-    )?;
-    let mut counters = Buffer::new(
-        device,
-        "ray counters",
-        counter_bytes(batch),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::GpuToCpu,
-        16,
-    )?;
+    // Per-sample-slot buffers the host refills (or reads back) once per batch.
+    let per_slot = |name: &str, bytes_per_slot: u64, location: MemoryLocation| {
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        Buffer::new(device, name, bytes_per_slot * u64::from(batch), usage, location, 16)
+    };
+    let mut lights = per_slot("lights", light_bytes, MemoryLocation::CpuToGpu)?;
+    let mut counters = per_slot("ray counters", counter_bytes(1), MemoryLocation::GpuToCpu)?;
     let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
-    let mut cameras = Buffer::new(
-        device,
-        "sample cameras",
-        camera_bytes * u64::from(batch),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        MemoryLocation::CpuToGpu,
-        16,
-    )?;
+    let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
     let accumulate = AccumulatePass::new(device, texture_count, traced)?;
