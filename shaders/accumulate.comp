@@ -41,6 +41,30 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec4Array { vec4 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
 
+// The rays a sample casts, as cast, for the benchmark's probe to replay without shading (render::ray_log);
+// ProbeRay's layout (ray_probe.comp).
+struct LoggedRay {
+    vec3 origin;
+    float t_min;
+    vec3 dir;
+    float t_max;
+    uint flags;  // besides gl_RayFlagsOpaqueEXT
+};
+layout(buffer_reference, scalar, buffer_reference_align = 4) buffer RayLog {
+    uint count;  // rays cast, even beyond capacity
+    uint capacity;
+    uint pad0;
+    uint pad1;
+    LoggedRay rays[];
+};
+
+void log_ray(uint flags, vec3 origin, float t_min, vec3 dir, float t_max) {
+    if (pc.ray_log == 0ul) return;
+    RayLog log = RayLog(pc.ray_log);
+    uint i = atomicAdd(log.count, 1u);
+    if (i < log.capacity) log.rays[i] = LoggedRay(origin, t_min, dir, t_max, flags);
+}
+
 // Sampler dimensions (DESIGN.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
 // host for the whole image, except pixel and lens in the reference mode (per pixel, here).
 const uint DIM_PIXEL = 0u;
@@ -77,6 +101,7 @@ vec3 offset_origin(vec3 p, vec3 ng, vec3 dir) {
 
 bool occluded(vec3 o, vec3 d, float t_max) {
     if (t_max <= 0.0) return false;
+    log_ray(gl_RayFlagsTerminateOnFirstHitEXT, o, 0.0, d, t_max);
     rayQueryEXT q;
     rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, o, 0.0, d, t_max);
     while (rayQueryProceedEXT(q)) {}
@@ -290,6 +315,7 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
     vec3 radiance = vec3(0.0);
     for (uint depth = 1u; depth < pc.max_depth; depth++) {
         secondary_rays++;
+        log_ray(0u, r.origin, 0.0, r.dir, 1e30);
         rayQueryEXT q;
         rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, r.origin, 0.0, r.dir, 1e30);
         while (rayQueryProceedEXT(q)) {}
@@ -376,6 +402,7 @@ void main() {
             vec2 t_range;
             camera_ray(cameras[pc.counter_slot], p, sample2(r.pixel, DIM_PIXEL) - 0.5, sample2(r.pixel, DIM_LENS), o, d,
                        t_range);
+            log_ray(0u, o, t_range.x, d, t_range.y);
             rayQueryEXT q;
             rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, t_range.x, d, t_range.y);
             while (rayQueryProceedEXT(q)) {}

@@ -1,12 +1,12 @@
 #version 460
 // Casts one ray per invocation from a buffer of rays against the TLAS and records the closest hit:
-// the ray-query smoke test, and later the benchmark's bare ray-query ceiling.
+// the ray-query smoke test, and the benchmark's bare ray-query ceiling (also replaying the rays a frame cast).
 #extension GL_EXT_ray_query : require
 #extension GL_EXT_scalar_block_layout : require
 
 layout(local_size_x = 64) in;
 
-struct ProbeRay { vec3 origin; float t_min; vec3 direction; float t_max; };
+struct ProbeRay { vec3 origin; float t_min; vec3 direction; float t_max; uint flags; };  // flags besides opaque
 struct ProbeHit { float t; int instance_custom_index; int instance_id; int primitive_id; };
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
@@ -19,7 +19,7 @@ void main() {
     if (i >= pc.ray_count) return;
     ProbeRay r = rays[i];
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, r.origin, r.t_min, r.direction, r.t_max);
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | r.flags, 0xFF, r.origin, r.t_min, r.direction, r.t_max);
     while (rayQueryProceedEXT(q)) {}
     ProbeHit h = ProbeHit(-1.0, -1, -1, -1);
     if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {

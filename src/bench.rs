@@ -118,11 +118,17 @@ pub struct FrameFigure {
     /// The bare ray-query probe on the same TLAS: rays cast and GPU ms.
     pub probe_rays: u64,
     pub probe_ms: f64,
+    /// The probe replaying the very rays one sample's accumulation pass cast (logged), with no shading: how many,
+    /// how many of them shadow rays (the first hit ends them), and GPU ms.
+    pub replay_rays: u64,
+    pub replay_shadow_rays: u64,
+    pub replay_ms: f64,
 }
 
 /// Renders `scene` at `width` × `height` with `spp` samples, timing every pass, then casts as many bare rays as
 /// the accumulation pass cast per sample (camera rays through jittered pixels, closest hit, no shading) at the
-/// scene's TLAS, for the driver's ray-query ceiling.
+/// scene's TLAS, for the driver's ray-query ceiling; and replays the rays one more sample's pass cast, as it cast
+/// them, for the ceiling of that pass's own mix of rays.
 pub fn time_frame(
     gpu: &Gpu,
     scene: &Scene,
@@ -148,6 +154,7 @@ pub fn time_frame(
     let frame = render_frame(device, scene, &on_gpu, &settings, &options, &mut |_, _| true)?;
     let stats = frame.stats;
     let (mut probe_rays, mut probe_ms) = (0, 0.0);
+    let (mut replay_rays, mut replay_shadow_rays, mut replay_ms) = (0, 0, 0.0);
     if probe {
         let ray_scene = crate::render::ray_scene::RayScene::build(device, scene, &on_gpu.geometry, 0)?;
         let transforms = scene.instance_transforms_at(scene.shutter.0);
@@ -168,21 +175,39 @@ pub fn time_frame(
                 let ndc = glam::Vec2::new(u * 2.0 - 1.0, v * 2.0 - 1.0);
                 let near = world_from_clip.project_point3(ndc.extend(0.0));
                 let far = world_from_clip.project_point3(ndc.extend(0.999));
-                ProbeRay { origin: near, t_min: 0.0, direction: (far - near).normalize_or_zero(), t_max: 1e30 }
+                ProbeRay::closest(near, (far - near).normalize_or_zero(), 0.0, 1e30)
             })
             .collect();
         let timer = TimestampPool::new(device, "probe timestamps", 2)?;
         let probe = RayProbe::new(device)?;
         // One warm-up, then the median of five casts: one short dispatch is at the mercy of this shared
         // machine's scheduler, while the frame's figure already sums many.
-        probe.cast_timed(&tlas, &rays, Some(&timer))?;
-        let mut casts =
-            (0..5).map(|_| Ok(probe.cast_timed(&tlas, &rays, Some(&timer))?.1)).collect::<Result<Vec<f64>>>()?;
-        casts.sort_by(f64::total_cmp);
-        probe_ms = casts[casts.len() / 2];
+        let median_ms = |tlas: &crate::vk::accel::AccelerationStructure, rays: &[ProbeRay]| -> Result<f64> {
+            probe.cast_timed(tlas, rays, Some(&timer))?;
+            let mut casts =
+                (0..5).map(|_| Ok(probe.cast_timed(tlas, rays, Some(&timer))?.1)).collect::<Result<Vec<f64>>>()?;
+            casts.sort_by(f64::total_cmp);
+            Ok(casts[casts.len() / 2])
+        };
+        probe_ms = median_ms(&tlas, &rays)?;
         probe_rays = per_sample;
+
+        // The replay: a one-sample frame logs its accumulation pass's rays; they are cast again, in that order,
+        // at a TLAS of that sample's shutter time.
+        let one_sample = crate::scene::settings::RenderSettings { spp: 1, ..settings.clone() };
+        let log_options = FrameOptions { log_rays: true, ..Default::default() };
+        let logged = render_frame(device, scene, &on_gpu, &one_sample, &log_options, &mut |_, _| true)?.ray_log;
+        let (t, _, _) = crate::render::frame::camera_sample_at(scene, &one_sample, 0);
+        let tlas_at_t = crate::vk::accel::AccelerationStructure::build_tlas(
+            device,
+            "replay TLAS",
+            &ray_scene.tlas_instances(scene, &scene.instance_transforms_at(t)),
+        )?;
+        replay_ms = median_ms(&tlas_at_t, &logged)?;
+        replay_rays = logged.len() as u64;
+        replay_shadow_rays = logged.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64;
     }
-    Ok(FrameFigure { stats, scene_bytes, probe_rays, probe_ms })
+    Ok(FrameFigure { stats, scene_bytes, probe_rays, probe_ms, replay_rays, replay_shadow_rays, replay_ms })
 }
 
 /// Least-squares exponent b of y = a·x^b.

@@ -595,6 +595,15 @@ fn bench_frame(args: &BenchArgs) -> Result<()> {
             f.probe_rays,
             100.0 * accumulate_rays_per_s / probe_rays_per_s
         );
+        let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
+        println!(
+            "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest hit), \
+             no shading: {:.2} M rays/s, {:.1}%",
+            f.replay_shadow_rays,
+            f.replay_rays - f.replay_shadow_rays,
+            replay_rays_per_s / 1e6,
+            100.0 * accumulate_rays_per_s / replay_rays_per_s
+        );
         let traced_times = traced.stats.pass_times.unwrap_or_default();
         println!(
             "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \

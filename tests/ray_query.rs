@@ -41,19 +41,22 @@ fn rays_hit_the_instances_they_aim_at() {
         TlasInstance { blas: &blas, transform: transforms[1], custom_index: 42, mask: 0xff },
     ];
     let tlas = AccelerationStructure::build_tlas(device, "smoke TLAS", &instances).unwrap();
-    let ray = |origin: Vec3, direction: Vec3| ProbeRay { origin, t_min: 0.0, direction, t_max: 100.0 };
+    let ray = |origin: Vec3, direction: Vec3| ProbeRay::closest(origin, direction, 0.0, 100.0);
     let rays = [
-        ray(Vec3::ZERO, -Vec3::Z),                     // 0: hits instance 0 at t = 5
-        ray(Vec3::new(0.9, -0.9, 1.0), -Vec3::Z),      // 1: inside the scaled square, t = 6
-        ray(Vec3::new(1.1, 0.0, 0.0), -Vec3::Z),       // 2: just outside the scaled square: miss
-        ray(Vec3::new(0.0, 0.0, -3.0), Vec3::X),       // 3: hits instance 1 at t = 10
-        ray(Vec3::new(0.0, 0.4, -3.4), Vec3::X * 2.0), // 4: unnormalised direction: t = 5 (ray units)
-        ray(Vec3::new(0.0, 0.0, -3.0), -Vec3::X),      // 5: away from everything: miss
-        ray(Vec3::new(0.0, 0.0, -6.0), Vec3::Z),       // 6: from behind instance 0 (cull disabled): t = 1
-        ProbeRay { origin: Vec3::ZERO, t_min: 0.0, direction: -Vec3::Z, t_max: 4.0 }, // 7: t_max short: miss
+        ray(Vec3::ZERO, -Vec3::Z),                         // 0: hits instance 0 at t = 5
+        ray(Vec3::new(0.9, -0.9, 1.0), -Vec3::Z),          // 1: inside the scaled square, t = 6
+        ray(Vec3::new(1.1, 0.0, 0.0), -Vec3::Z),           // 2: just outside the scaled square: miss
+        ray(Vec3::new(0.0, 0.0, -3.0), Vec3::X),           // 3: hits instance 1 at t = 10
+        ray(Vec3::new(0.0, 0.4, -3.4), Vec3::X * 2.0),     // 4: unnormalised direction: t = 5 (ray units)
+        ray(Vec3::new(0.0, 0.0, -3.0), -Vec3::X),          // 5: away from everything: miss
+        ray(Vec3::new(0.0, 0.0, -6.0), Vec3::Z),           // 6: from behind instance 0 (cull disabled): t = 1
+        ProbeRay::closest(Vec3::ZERO, -Vec3::Z, 0.0, 4.0), // 7: t_max short: miss
+        // Shadow rays (the first hit ends them), as the accumulation pass casts and the benchmark replays:
+        ProbeRay { flags: ProbeRay::FIRST_HIT, ..ray(Vec3::new(0.0, 0.0, -3.0), Vec3::X) }, // 8: t = 10
+        ProbeRay { flags: ProbeRay::FIRST_HIT, t_max: 9.0, ..ray(Vec3::new(0.0, 0.0, -3.0), Vec3::X) }, // 9: miss
     ];
     // (hit, t, custom index, instance id)
-    let expected: [(bool, f32, i32, i32); 8] = [
+    let expected: [(bool, f32, i32, i32); 10] = [
         (true, 5.0, 7, 0),
         (true, 6.0, 7, 0),
         (false, -1.0, -1, -1),
@@ -61,6 +64,8 @@ fn rays_hit_the_instances_they_aim_at() {
         (true, 5.0, 42, 1),
         (false, -1.0, -1, -1),
         (true, 1.0, 7, 0),
+        (false, -1.0, -1, -1),
+        (true, 10.0, 42, 1),
         (false, -1.0, -1, -1),
     ];
     let probe = RayProbe::new(device).unwrap();

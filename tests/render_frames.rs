@@ -210,6 +210,38 @@ fn raster_and_traced_primary_visibility_agree_on_the_showcase() {
     gpu.finish().unwrap();
 }
 
+/// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
+/// with a sane interval, shadow rays flagged to end at their first hit; and logging leaves the picture untouched.
+#[test]
+fn the_ray_log_holds_every_ray_the_pass_casts_and_only_observes() {
+    use strata::render::frame::{render_frame, FrameOptions};
+    use strata::render::ray_probe::ProbeRay;
+    let gpu = GpuTest::new();
+    let scene = load(&repo("scenes/showcase.toml"));
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(64, 36, 1, SamplerKind::Jittered) };
+        let logged = FrameOptions { log_rays: true, ..Default::default() };
+        let frame = render_frame(gpu.device(), &scene, &on_gpu, &s, &logged, &mut |_, _| true).unwrap();
+        let plain = render(gpu.device(), &scene, &s);
+        assert!(frame.linear == plain.linear, "{primary:?}: logging the rays changed the picture");
+        let st = &frame.stats;
+        let shadow = frame.ray_log.iter().filter(|r| r.flags == ProbeRay::FIRST_HIT).count() as u64;
+        let closest = frame.ray_log.iter().filter(|r| r.flags == 0).count() as u64;
+        eprintln!("{primary:?}: {} rays logged, {shadow} shadow, {closest} closest hit; {st:?}", frame.ray_log.len());
+        assert_eq!(shadow + closest, frame.ray_log.len() as u64, "{primary:?}: unexpected ray flags");
+        assert_eq!(shadow, st.shadow_rays, "{primary:?}: shadow rays logged vs counted");
+        assert_eq!(closest, st.secondary_rays + st.camera_rays, "{primary:?}: closest-hit rays logged vs counted");
+        assert!(st.shadow_rays > 1000 && st.secondary_rays > 100, "{primary:?}: too few rays to mean anything");
+        for r in &frame.ray_log {
+            assert!(r.origin.is_finite() && (r.direction.length() - 1.0).abs() < 1e-3, "{primary:?}: ray {r:?}");
+            assert!(r.t_min >= 0.0 && r.t_max > r.t_min, "{primary:?}: empty interval {r:?}");
+        }
+    }
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
 /// Soft shadows, depth of field and motion blur without glossy paths: a Lambertian floor and boxes (one
 /// sliding) under a quad light, seen through a lens focused between them.
 fn effects_scene() -> Scene {

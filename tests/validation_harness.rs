@@ -101,7 +101,7 @@ fn an_empty_tlas_is_a_valid_miss_everywhere() {
     let device = gpu.device();
     let tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();
     let probe = RayProbe::new(device).unwrap();
-    let ray = strata::render::ray_probe::ProbeRay { origin: Vec3::ZERO, t_min: 0.0, direction: Vec3::Z, t_max: 1e9 };
+    let ray = strata::render::ray_probe::ProbeRay::closest(Vec3::ZERO, Vec3::Z, 0.0, 1e9);
     let hits = probe.cast(&tlas, &[ray; 3]).unwrap();
     assert!(hits.iter().all(|h| !h.is_hit()), "{hits:?}");
 }

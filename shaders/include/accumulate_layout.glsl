@@ -53,5 +53,6 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint counter_slot;
     uint max_depth;
     float total_light_power;  // the sum the selection probabilities were divided by
+    uint64_t ray_log;         // where to record every ray cast (RayLog, the benchmark's replay probe), or 0
 } pc;
 #endif

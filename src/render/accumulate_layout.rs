@@ -95,6 +95,9 @@ pub struct AccumulatePush {
     /// The sum of the lights' selection powers (for the selection probability of an emissive triangle a
     /// gloss ray hits).
     pub total_light_power: f32,
+    /// The device address of a `RayLog` (render::ray_log) to record every ray cast into, or 0.
+    pub ray_log: u64,
+    pub pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -127,7 +130,8 @@ mod tests {
         assert_eq!(offset_of!(GpuPrimitiveRecord, material), 56);
         assert_eq!(size_of::<GpuCamera>(), 96);
         assert_eq!(offset_of!(GpuCamera, range), 80);
-        assert_eq!(size_of::<AccumulatePush>(), 96);
+        assert_eq!(size_of::<AccumulatePush>(), 112);
+        assert_eq!(offset_of!(AccumulatePush, ray_log), 96);
         assert_eq!(offset_of!(AccumulatePush, width), 48);
         assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
         assert_eq!(size_of::<ResolvePush>(), 32);

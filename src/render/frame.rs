@@ -39,11 +39,14 @@ pub struct FrameOptions {
     /// Time every pass with GPU timestamps (for benchmarks).
     pub timestamps: bool,
     pub max_depth: u32,
+    /// Record every ray the first sample's accumulation pass casts, into [`RenderedFrame::ray_log`] (for the
+    /// benchmark to replay through the bare ray-query probe).
+    pub log_rays: bool,
 }
 
 impl Default for FrameOptions {
     fn default() -> Self {
-        Self { timestamps: false, max_depth: DEFAULT_MAX_DEPTH }
+        Self { timestamps: false, max_depth: DEFAULT_MAX_DEPTH, log_rays: false }
     }
 }
 
@@ -87,6 +90,8 @@ pub struct RenderedFrame {
     /// Exposed, tone-mapped, sRGB-encoded 8-bit RGBA, ready for PNG.
     pub display: Vec<u8>,
     pub stats: FrameStats,
+    /// With [`FrameOptions::log_rays`]: the rays of sample 0's accumulation pass, in the order it cast them.
+    pub ray_log: Vec<super::ray_probe::ProbeRay>,
 }
 
 /// The error a render returns when its progress callback asked it to stop (Ctrl-C).
@@ -223,6 +228,14 @@ pub fn render_frame(
         counters: &counters,
         cameras: &cameras,
     })?;
+    // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
+    let max_depth = options.max_depth.max(1);
+    let rays_per_pixel = 2 * u64::from(max_depth);
+    let ray_log = if options.log_rays {
+        Some(super::ray_log::RayLog::new(device, u64::from(width) * u64::from(height) * rays_per_pixel)?)
+    } else {
+        None
+    };
     let resolve = ResolvePass::new(device)?;
     let resolve_set = resolve.descriptor_set(&accumulation, &display)?;
     let timer = if options.timestamps {
@@ -278,8 +291,10 @@ pub fn render_frame(
                 light_count: light_count as u32,
                 analytic_light_count: set.analytic.min(light_count) as u32,
                 counter_slot: slot,
-                max_depth: options.max_depth.max(1),
+                max_depth,
                 total_light_power: set.total_power,
+                ray_log: ray_log.as_ref().filter(|_| index == 0).map_or(0, |log| log.address()),
+                pad: [0; 2],
             };
             samples.push((camera_sample, push));
         }
@@ -386,5 +401,9 @@ pub fn render_frame(
         device_bytes,
         image_bytes,
     };
-    Ok(RenderedFrame { linear, display, stats })
+    let ray_log = match &ray_log {
+        Some(log) => log.rays()?,
+        None => Vec::new(),
+    };
+    Ok(RenderedFrame { linear, display, stats, ray_log })
 }

@@ -9,6 +9,7 @@ pub mod gpu_scene;
 pub mod lights;
 pub mod noise_probe;
 pub mod preview;
+pub mod ray_log;
 pub mod ray_probe;
 pub mod ray_scene;
 pub mod resolve;

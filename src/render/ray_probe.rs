@@ -18,6 +18,18 @@ pub struct ProbeRay {
     pub t_min: f32,
     pub direction: Vec3,
     pub t_max: f32,
+    /// Ray flags besides opaque: 0 for the closest hit, [`ProbeRay::FIRST_HIT`] for a shadow ray.
+    pub flags: u32,
+}
+
+impl ProbeRay {
+    /// gl_RayFlagsTerminateOnFirstHitEXT: any hit ends the ray (a shadow ray).
+    pub const FIRST_HIT: u32 = 4;
+
+    /// A ray that finds the closest hit within `t_min..t_max`.
+    pub fn closest(origin: Vec3, direction: Vec3, t_min: f32, t_max: f32) -> Self {
+        Self { origin, t_min, direction, t_max, flags: 0 }
+    }
 }
 
 /// Mirrors `ProbeHit`: `t < 0` and ids of −1 mean a miss.
@@ -122,7 +134,8 @@ mod tests {
 
     #[test]
     fn layouts_match_the_glsl_scalar_structs() {
-        assert_eq!(std::mem::size_of::<ProbeRay>(), 32);
+        assert_eq!(std::mem::size_of::<ProbeRay>(), 36);
+        assert_eq!(std::mem::offset_of!(ProbeRay, flags), 32);
         assert_eq!(std::mem::offset_of!(ProbeRay, direction), 16);
         assert_eq!(std::mem::size_of::<ProbeHit>(), 16);
     }
