@@ -39,7 +39,8 @@ enum Command {
     Info(InfoArgs),
     /// Measure pass times with GPU timestamps and print figures (no pass/fail): the G-buffer pass per sample for
     /// the Cornell box and a 1M-triangle mesh at 512x512 and 1280x720, the cost of bump-mapping derivatives; and
-    /// whole frames (per-pass times, rays/s against a bare ray-query probe, scaling with spp and pixels, memory).
+    /// whole frames (per-pass times; rays/s against bare ray-query probes: camera rays, and a replay of the very
+    /// rays one sample cast; scaling with spp and pixels; memory).
     #[command(after_help = "Figures vary with the machine and its load; compare the ratios printed in one run.\n\n\
                             Examples:\n  strata bench\n  strata bench --samples 9 --scene scenes/cornell.toml")]
     Bench(BenchArgs),
