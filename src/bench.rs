@@ -98,15 +98,20 @@ pub fn time_gbuffer(
             times.push((t[1] - t[0]) / 1e6);
         }
     }
-    times.sort_by(f64::total_cmp);
     Ok(GBufferFigure {
         scene: name.to_owned(),
         width,
         height,
         triangles: scene.triangle_count(),
         bump: bump.label(),
-        median_ms: times[times.len() / 2],
+        median_ms: median(times),
     })
+}
+
+/// The middle value (the upper one of an even count); `values` is not empty.
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
 }
 
 /// One distributed-ray-traced frame, measured.
@@ -157,12 +162,11 @@ pub fn time_frame(
     let (mut replay_rays, mut replay_shadow_rays, mut replay_ms) = (0, 0, 0.0);
     if probe {
         let ray_scene = crate::render::ray_scene::RayScene::build(device, scene, &on_gpu.geometry, 0)?;
-        let transforms = scene.instance_transforms_at(scene.shutter.0);
-        let tlas = crate::vk::accel::AccelerationStructure::build_tlas(
-            device,
-            "probe TLAS",
-            &ray_scene.tlas_instances(scene, &transforms),
-        )?;
+        let tlas_at = |name: &str, t: f32| {
+            let instances = ray_scene.tlas_instances(scene, &scene.instance_transforms_at(t));
+            crate::vk::accel::AccelerationStructure::build_tlas(device, name, &instances)
+        };
+        let tlas = tlas_at("probe TLAS", scene.shutter.0)?;
         let per_sample = ((stats.shadow_rays + stats.secondary_rays) / u64::from(spp.max(1))).max(1);
         let camera = scene.camera_at(scene.shutter.0);
         let sample = camera_sample(&camera, width, height, Vec2::splat(0.5), Vec2::ZERO);
@@ -184,10 +188,8 @@ pub fn time_frame(
         // machine's scheduler, while the frame's figure already sums many.
         let median_ms = |tlas: &crate::vk::accel::AccelerationStructure, rays: &[ProbeRay]| -> Result<f64> {
             probe.cast_timed(tlas, rays, Some(&timer))?;
-            let mut casts =
-                (0..5).map(|_| Ok(probe.cast_timed(tlas, rays, Some(&timer))?.1)).collect::<Result<Vec<f64>>>()?;
-            casts.sort_by(f64::total_cmp);
-            Ok(casts[casts.len() / 2])
+            let casts = (0..5).map(|_| Ok(probe.cast_timed(tlas, rays, Some(&timer))?.1)).collect::<Result<_>>()?;
+            Ok(median(casts))
         };
         probe_ms = median_ms(&tlas, &rays)?;
         probe_rays = per_sample;
@@ -198,11 +200,7 @@ pub fn time_frame(
         let log_options = FrameOptions { log_rays: true, ..Default::default() };
         let logged = render_frame(device, scene, &on_gpu, &one_sample, &log_options, &mut |_, _| true)?.ray_log;
         let (t, _, _) = crate::render::frame::camera_sample_at(scene, &one_sample, 0);
-        let tlas_at_t = crate::vk::accel::AccelerationStructure::build_tlas(
-            device,
-            "replay TLAS",
-            &ray_scene.tlas_instances(scene, &scene.instance_transforms_at(t)),
-        )?;
+        let tlas_at_t = tlas_at("replay TLAS", t)?;
         replay_ms = median_ms(&tlas_at_t, &logged)?;
         replay_rays = logged.len() as u64;
         replay_shadow_rays = logged.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64;
