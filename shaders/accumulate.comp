@@ -235,6 +235,11 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     s.m.albedo = base.rgb;
     s.m.metallic = m.metallic;
     s.m.roughness = m.roughness;
+    if (m.metallic_roughness_texture >= 0) {
+        vec4 texel = textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)], uv, 0.0);
+        s.m.metallic *= texel.b;
+        s.m.roughness *= texel.g;
+    }
     s.m.transmission = m.transmission;
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;

@@ -64,7 +64,17 @@ void main() {
     out_shading_normal = vec4(shading, height);
     out_geometric_normal = vec4(geometric, 0.0);
     out_albedo = base;
-    out_material = vec4(m.metallic, m.roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
-    out_emission = vec4(m.emissive.rgb, 0.0);
+    // Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); ray hits do the same (accumulate.comp).
+    float metallic = m.metallic;
+    float roughness = m.roughness;
+    if (m.metallic_roughness_texture >= 0) {
+        vec4 texel = texture(textures[nonuniformEXT(m.metallic_roughness_texture)], in_uv);
+        metallic *= texel.b;
+        roughness *= texel.g;
+    }
+    vec3 emission = m.emissive.rgb;
+    if (m.emissive_texture >= 0) emission *= texture(textures[nonuniformEXT(m.emissive_texture)], in_uv).rgb;
+    out_material = vec4(metallic, roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
+    out_emission = vec4(emission, 0.0);
     out_ids = uvec2(d.instance + 1u, d.material);
 }

@@ -40,8 +40,8 @@ fn camera(eye: Vec3, target: Vec3, up: Vec3, lens: Lens) -> Camera {
     }
 }
 
-/// The pass, built once per test: lavapipe compiles the noise-heavy fragment shader in seconds. The test scenes
-/// have no textures, so one pipeline (sized for one texture slot) serves them all.
+/// The pass, built once per test: lavapipe compiles the noise-heavy fragment shader in seconds. Most test scenes
+/// have at most one texture, so one pipeline (sized for one texture slot) serves them.
 fn pass(gpu: &common::GpuTest) -> GBufferPass {
     GBufferPass::new(gpu.device(), 1).unwrap()
 }
@@ -51,7 +51,7 @@ fn render(gpu: &common::GpuTest, pass: &GBufferPass, scene: &Scene, size: (u32, 
     let device = gpu.device();
     let gpu_scene = GpuScene::upload(device, scene).unwrap();
     let textures = GpuTextures::upload(device, scene).unwrap();
-    assert_eq!(textures.images.len(), 1, "test scenes have no textures");
+    assert_eq!(textures.images.len(), scene.textures.len().max(1), "one image per texture, or the white stand-in");
     let gbuffer = GBuffer::new(device, size.0, size.1).unwrap();
     let transforms: Vec<Mat4> = scene.instances.iter().map(|i| i.world_from_object).collect();
     let materials = pass.materials(scene, &textures).unwrap();
@@ -315,6 +315,54 @@ fn normal_textures_tilt_the_normal_and_the_bump_composes_on_top() {
         }
         assert!(worst < 1e-3, "bump {}: worst normal component error {worst}", bump.is_some());
     }
+    drop(pass);
+    gpu.finish().unwrap();
+}
+
+#[test]
+fn metallic_roughness_and_emissive_textures_scale_their_factors() {
+    use strata::output::srgb_to_linear;
+    use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
+    let gpu = common::GpuTest::new();
+    let pass = GBufferPass::new(gpu.device(), 2).unwrap();
+    // Roughness in G, metalness in B, stored linear (glTF 2.0 §3.9.2); the emissive texel is sRGB colour.
+    let metal_rough = [0u8, 153, 51, 255];
+    let emissive = [188u8, 128, 64, 255];
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, Lens::PINHOLE);
+    let mut scene = scene_of(plane(Vec2::splat(2.0), Vec2::splat(2.0), None), Mat4::IDENTITY, None, cam);
+    scene.images = vec![
+        TextureImage { name: "metal-rough texel".into(), width: 1, height: 1, rgba8: metal_rough.to_vec() },
+        TextureImage { name: "emissive texel".into(), width: 1, height: 1, rgba8: emissive.to_vec() },
+    ];
+    scene.textures = vec![
+        Texture { name: "metal-rough".into(), image: 0, sampler: Sampler::default(), srgb: false },
+        Texture { name: "emissive".into(), image: 1, sampler: Sampler::default(), srgb: true },
+    ];
+    let m = &mut scene.materials[0];
+    (m.metallic, m.roughness, m.emissive) = (0.5, 0.8, Vec3::new(2.0, 1.0, 0.5));
+    m.metallic_roughness_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
+    m.emissive_texture = Some(TextureRef { texture: 1, tex_coord: 0, transform: None });
+    let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
+    let (metallic, roughness) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0);
+    let emission =
+        Vec3::new(2.0, 1.0, 0.5) * Vec3::from_array([0, 1, 2].map(|i| srgb_to_linear(f32::from(emissive[i]) / 255.0)));
+    let mut covered = 0;
+    for y in 0..16 {
+        for x in 0..16 {
+            if !frame.covered(x, y) {
+                continue;
+            }
+            covered += 1;
+            // The material attachment holds 8-bit unorm: within half a step.
+            let mat = frame.at(MATERIAL, x, y);
+            let step = 0.5 / 255.0 + 1e-4;
+            assert!((mat[0] - metallic).abs() < step && (mat[1] - roughness).abs() < step, "({x}, {y}): {mat:?}");
+            let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+            assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+        }
+    }
+    assert!(covered > 100, "{covered} pixels covered");
     drop(pass);
     gpu.finish().unwrap();
 }

@@ -210,6 +210,45 @@ fn raster_and_traced_primary_visibility_agree_on_the_showcase() {
     gpu.finish().unwrap();
 }
 
+/// glTF's metallic-roughness texture scales the factors (glTF 2.0 §3.9.2) wherever a surface is shaded: in the
+/// G-buffer, at the reference mode's visible hits, and at the gloss and translucency rays' hits. A texel with
+/// roughness 1 and metalness 0 on every showcase material must render exactly as the factors with metalness 0.
+#[test]
+fn metallic_roughness_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
+    let gpu = GpuTest::new();
+    let original = load(&repo("scenes/showcase.toml"));
+    assert!(original.materials.iter().any(|m| m.metallic > 0.0), "the showcase needs a metal for this test");
+    let mut textured = original.clone();
+    textured.images.push(TextureImage {
+        name: "metal 0, rough 1".into(),
+        width: 1,
+        height: 1,
+        rgba8: vec![0, 255, 0, 255],
+    });
+    textured.textures.push(Texture {
+        name: "metal 0, rough 1".into(),
+        image: textured.images.len() - 1,
+        sampler: Sampler::default(),
+        srgb: false,
+    });
+    let texture = TextureRef { texture: textured.textures.len() - 1, tex_coord: 0, transform: None };
+    let mut factors = original.clone();
+    for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
+        t.metallic_roughness_texture = Some(texture);
+        f.metallic = 0.0;
+    }
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(64, 36, 2, SamplerKind::Jittered) };
+        let with_texture = render(gpu.device(), &textured, &s).linear;
+        let with_factors = render(gpu.device(), &factors, &s).linear;
+        let untouched = render(gpu.device(), &original, &s).linear;
+        assert!(with_texture == with_factors, "{primary:?}: the texture does not act as metalness 0, roughness 1");
+        assert!(with_factors != untouched, "{primary:?}: metalness does not show in this picture");
+    }
+    gpu.finish().unwrap();
+}
+
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
 /// with a sane interval, shadow rays flagged to end at their first hit; and logging leaves the picture untouched.
 #[test]

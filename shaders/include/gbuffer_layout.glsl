@@ -39,6 +39,7 @@ struct GpuMaterial {
     int emissive_texture;
     vec4 base_color_uv_rows[2];
     Bump bump;               // kind BUMP_NONE: no bump
+    int metallic_roughness_texture;  // roughness in G, metalness in B (glTF 2.0 §3.9.2); -1: none
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.

@@ -136,6 +136,9 @@ pub struct GpuMaterial {
     pub emissive_texture: i32,
     pub base_color_uv_rows: [Vec4; 2],
     pub bump: GpuBump,
+    /// Roughness in G, metalness in B, scaling the factors (glTF 2.0 §3.9.2); -1: none.
+    pub metallic_roughness_texture: i32,
+    pub pad: [i32; 3],
 }
 
 impl GpuMaterial {
@@ -166,6 +169,8 @@ impl GpuMaterial {
             emissive_texture: texture(m.emissive_texture),
             base_color_uv_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
             bump: GpuBump::from_bump(m.bump.as_ref()),
+            metallic_roughness_texture: texture(m.metallic_roughness_texture),
+            pad: [0; 3],
         }
     }
 }
@@ -188,7 +193,8 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, base_color_texture), 64);
         assert_eq!(offset_of!(GpuMaterial, base_color_uv_rows), 80);
         assert_eq!(offset_of!(GpuMaterial, bump), 112);
-        assert_eq!(size_of::<GpuMaterial>(), 144);
+        assert_eq!(offset_of!(GpuMaterial, metallic_roughness_texture), 144);
+        assert_eq!(size_of::<GpuMaterial>(), 160);
     }
 
     #[test]
