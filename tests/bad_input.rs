@@ -194,6 +194,22 @@ fn every_bad_input_gives_its_error() {
             "unknown light type",
         ),
         (
+            scene_file(
+                &dir,
+                "quad-range.toml",
+                "[[light]]\ntype = \"quad\"\nposition = [0, 2, 0]\nsize = [1, 1]\nradiance = 1\nrange = 3\n",
+            ),
+            "a quad light has no range",
+        ),
+        (
+            scene_file(
+                &dir,
+                "zero-range.toml",
+                "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 1\nrange = 0\n",
+            ),
+            "range = 0 must be a positive number",
+        ),
+        (
             scene_file(&dir, "nan-position.toml", "[camera]\nposition = [nan, 0, 0]\nlook_at = [0, 0, -1]\n"),
             "must be finite",
         ),

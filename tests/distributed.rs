@@ -315,3 +315,53 @@ fn gloss_widens_the_reflected_edge_with_roughness_and_roughness_zero_is_a_mirror
     assert!(widths.windows(2).all(|w| w[1] > w[0] * 1.3), "edge widths must grow with roughness: {widths:?}");
     gpu.finish().unwrap();
 }
+
+/// KHR_lights_punctual `range`: a point light's contribution follows the extension's recommended window
+/// max(min(1 − (d/range)⁴, 1), 0) on top of the inverse square law, and is zero beyond the range — for a point
+/// (delta) light and for one with a radius (sampled as a sphere, windowed by the distance to its centre).
+#[test]
+fn a_point_lights_range_windows_its_light_as_khr_lights_punctual_recommends() {
+    let gpu = GpuTest::new();
+    let (width, height, half_height) = (256u32, 32u32, 0.125f32); // 2 m x 0.25 m of ground
+    let (light_height, range) = (1.0f32, 1.3f32);
+    let lit = |radius: f32, range: f32| {
+        let mut scene = Scene::default();
+        let ground = lambertian(&mut scene, 0.8);
+        let (p, m) = plane_at(Vec2::new(20.0, 20.0), Vec3::ZERO, false, ground);
+        place(&mut scene, "ground", p, m);
+        scene.lights.push(Light {
+            name: "point".into(),
+            shape: LightShape::Point { radius },
+            emission: Vec3::splat(1.0),
+            world_from_light: light_down(Vec3::new(0.0, light_height, 0.0)),
+            node: None,
+            range,
+        });
+        scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, half_height));
+        render(gpu.device(), &scene, &settings(width, height, 1, SamplerKind::Regular)).linear
+    };
+    for radius in [0.0, 0.05] {
+        let (windowed, open) = (lit(radius, range), lit(radius, 0.0));
+        let (mut checked, mut dark) = (0, 0);
+        for y in 0..height {
+            for x in 0..width {
+                // Pixel centres on the ground: image x is world x, image y (down) world z.
+                let wx = ((x as f32 + 0.5) / width as f32 * 2.0 - 1.0) * half_height * width as f32 / height as f32;
+                let wz = ((y as f32 + 0.5) / height as f32 * 2.0 - 1.0) * half_height;
+                let d = Vec3::new(wx, -light_height, wz).length();
+                let want = (1.0 - (d / range).powi(4)).clamp(0.0, 1.0);
+                let (w, o) = (windowed.pixel(x, y)[0], open.pixel(x, y)[0]);
+                assert!(o > 0.0, "radius {radius}: ({x}, {y}) is unlit without a range");
+                if d > range * 1.001 {
+                    assert_eq!(w, 0.0, "radius {radius}: ({x}, {y}) at {d} m lies beyond the range");
+                    dark += 1;
+                } else if d < range * 0.999 {
+                    assert!((w / o - want).abs() < 2e-3, "radius {radius}: ({x}, {y}) at {d} m: {} vs {want}", w / o);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 3000 && dark > 1000, "radius {radius}: {checked} pixels in range, {dark} beyond");
+    }
+    gpu.finish().unwrap();
+}

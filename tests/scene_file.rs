@@ -88,6 +88,20 @@ fn soft_shadow_lights_convert_power_to_radiance() {
     let point = &s.lights[3];
     assert_eq!(point.shape, LightShape::Point { radius: 0.0 });
     assert_eq!(point.emission, Vec3::splat(2.0));
+    assert_eq!(point.range, 0.0, "no range given: unbounded");
+}
+
+#[test]
+fn a_point_light_takes_a_range() {
+    let dir = std::env::temp_dir().join(format!("strata-range-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("ranged.toml");
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.gltf");
+    let light = "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 3\nrange = 4.5\n";
+    std::fs::write(&path, format!("gltf = {:?}\n{light}", gltf.display().to_string())).unwrap();
+    let scene = strata::load(&path, &Default::default()).unwrap_or_else(|e| panic!("{e:#}")).scene;
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(scene.lights[0].range, 4.5);
 }
 
 #[test]

@@ -16,7 +16,7 @@ struct GpuLight {
     vec4 axis_v;         // xyz half extent v / radius * v axis / edge 2, w area
     vec4 normal;         // xyz direction of travel, w two-sided
     vec4 emission;       // rgb, w selection CDF (inclusive)
-    vec4 cone;           // x cos outer, y cos inner, w selection probability
+    vec4 cone;           // x cos outer, y cos inner, z range of points and spots (0: infinite), w selection probability
 };
 
 struct GpuPrimitiveRecord {

@@ -24,6 +24,15 @@ float spot_falloff(GpuLight l, vec3 to_point) {
     return t * t;
 }
 
+// KHR_lights_punctual's range of a point or spot light at distance d from it: the extension's recommended
+// window max(min(1 − (d / range)⁴, 1), 0) on top of the inverse square law; 1 without a range.
+float range_window(GpuLight l, float d) {
+    float range = l.cone.z;
+    if (!(range > 0.0) || (l.position_kind.w != LIGHT_POINT && l.position_kind.w != LIGHT_SPOT)) return 1.0;
+    float q = d / range;
+    return clamp(1.0 - q * q * q * q, 0.0, 1.0);
+}
+
 // Radiance of a sphere-shaped light: spheres carry it; a point or spot of radius r and intensity I has
 // L = I / (π r²) (its projected disk emits I).
 vec3 sphere_radiance(GpuLight l) {
@@ -72,7 +81,8 @@ LightSample sample_light(GpuLight l, vec3 x, vec2 u) {
         s.dir = normalize((t * cos(phi) + b * sin(phi)) * sin_t + w * cos_t);
         float tc = dot(d, s.dir);
         s.dist = tc - sqrt(max(0.0, r * r - (dist2 - tc * tc)));
-        s.value = sphere_radiance(l) * (2.0 * PI * one_minus_cos_max) * spot_falloff(l, -w);
+        s.value = sphere_radiance(l) * (2.0 * PI * one_minus_cos_max) * spot_falloff(l, -w) *
+                  range_window(l, sqrt(dist2));
         s.pdf = 1.0 / (2.0 * PI * one_minus_cos_max);
         return s;
     }
@@ -82,7 +92,7 @@ LightSample sample_light(GpuLight l, vec3 x, vec2 u) {
         if (!(dist2 > 0.0)) return s;
         s.dist = sqrt(dist2);
         s.dir = d / s.dist;
-        s.value = l.emission.rgb / dist2 * spot_falloff(l, -s.dir);
+        s.value = l.emission.rgb / dist2 * spot_falloff(l, -s.dir) * range_window(l, s.dist);
         s.delta = true;
         return s;
     }
@@ -157,7 +167,7 @@ float intersect_light(GpuLight l, vec3 o, vec3 d, float t_max, out vec3 radiance
         if (disc < 0.0 || cq <= 0.0) return -1.0;
         float t = -bq - sqrt(disc);
         if (t <= 0.0 || t >= t_max) return -1.0;
-        radiance = sphere_radiance(l) * spot_falloff(l, normalize(o + t * d - c));
+        radiance = sphere_radiance(l) * spot_falloff(l, normalize(o + t * d - c)) * range_window(l, length(oc));
         return t;
     }
     if (kind != LIGHT_QUAD && kind != LIGHT_DISK) return -1.0;

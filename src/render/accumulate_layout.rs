@@ -30,7 +30,8 @@ pub struct GpuLight {
     pub normal: Vec4,
     /// rgb: radiance, intensity or irradiance; w: the selection CDF up to and including this light.
     pub emission: Vec4,
-    /// x: cos(outer cone), y: cos(inner cone) for spots; z: unused; w: the probability of selecting it.
+    /// x: cos(outer cone), y: cos(inner cone) for spots; z: range of points and spots (0: infinite); w: the
+    /// probability of selecting it.
     pub cone: Vec4,
 }
 

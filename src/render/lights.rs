@@ -54,7 +54,8 @@ impl LightSet {
                 axis_v: Vec4::ZERO,
                 normal: travel.extend(0.0),
                 emission: e.extend(0.0),
-                cone: Vec4::ZERO,
+                // KHR_lights_punctual: range is not scaled by the node's transform.
+                cone: Vec4::new(0.0, 0.0, light.range.max(0.0), 0.0),
             };
             let power = match light.shape {
                 LightShape::Point { radius } => {
@@ -65,7 +66,7 @@ impl LightSet {
                 LightShape::Spot { inner_cone, outer_cone, radius } => {
                     g.position_kind.w = light_kind::SPOT;
                     g.axis_u.w = radius * x.length();
-                    g.cone = Vec4::new(outer_cone.cos(), inner_cone.cos(), 0.0, 0.0);
+                    (g.cone.x, g.cone.y) = (outer_cone.cos(), inner_cone.cos());
                     2.0 * PI * (1.0 - outer_cone.cos()).max(1e-4) * luminance(e)
                 }
                 LightShape::Directional => {

@@ -58,6 +58,7 @@ struct LightSection {
     direction: Option<S<[f32; 3]>>,
     size: Option<S<[f32; 2]>>,
     radius: Option<S<f32>>,
+    range: Option<S<f32>>,
     color: Option<S<[f32; 3]>>,
     radiance: Option<S<f32>>,
     power: Option<S<f32>>,
@@ -462,6 +463,10 @@ fn build_light(source: &Source<'_>, l: &LightSection, index: usize) -> Result<Li
         node: None,
         range: 0.0,
     };
+    if let Some(r) = &l.range {
+        forbid(!matches!(shape, LightShape::Point { .. }), "range")?;
+        light.range = source.positive(r, "range")?;
+    }
     let given = [l.radiance.is_some(), l.power.is_some(), l.intensity.is_some()].iter().filter(|&&b| b).count();
     if given != 1 {
         return Err(source.error(l.kind.span(), "give exactly one of radiance, power or intensity"));
