@@ -23,6 +23,9 @@ const uint GROUP_SIZE = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
 // 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
 // pipeline holds only its own path).
 layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
+// 1: some geometry is alpha-tested (glTF MASK or BLEND) and built non-opaque, so ray queries stop at its
+// candidate triangles to test them; 0: every ray is forced opaque and the pipeline holds no alpha test.
+layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
 // position, shading normal, geometric normal, albedo, material, emission (gbuffer_layout.glsl).
@@ -40,6 +43,42 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec4Array { vec4 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
+
+// Whether a candidate triangle of alpha-tested geometry covers its point: the rule of gbuffer.frag's discard
+// (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
+bool alpha_covers(rayQueryEXT q) {
+    int record = rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false);
+    uint tri = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false));
+    vec2 bc = rayQueryGetIntersectionBarycentricsEXT(q, false);
+    GpuPrimitiveRecord r = primitives[record];
+    GpuMaterial m = materials[r.material];
+    UintArray indices = UintArray(r.indices);
+    uint i0 = indices.v[3u * tri];
+    uint i1 = indices.v[3u * tri + 1u];
+    uint i2 = indices.v[3u * tri + 2u];
+    vec3 w = vec3(1.0 - bc.x - bc.y, bc.x, bc.y);
+    Vec4Array colors = Vec4Array(r.colors);
+    float alpha = m.base_color.a * (w.x * colors.v[i0].a + w.y * colors.v[i1].a + w.z * colors.v[i2].a);
+    if (m.base_color_texture >= 0) {
+        Vec2Array uvs = Vec2Array(r.uvs);
+        vec2 uv = w.x * uvs.v[i0] + w.y * uvs.v[i1] + w.z * uvs.v[i2];
+        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0).a;
+    }
+    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+}
+
+// The flags every ray query starts with, besides its own.
+const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
+
+// Runs a ray query to its end, confirming the candidate triangles of alpha-tested geometry that cover their point.
+void run_query(rayQueryEXT q) {
+    while (rayQueryProceedEXT(q)) {
+        if (ALPHA_TESTED != 0u &&
+            rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT && alpha_covers(q)) {
+            rayQueryConfirmIntersectionEXT(q);
+        }
+    }
+}
 
 // The rays a sample casts, as cast, for the benchmark's probe to replay without shading (render::ray_log);
 // ProbeRay's layout (ray_probe.comp).
@@ -103,8 +142,8 @@ bool occluded(vec3 o, vec3 d, float t_max) {
     if (t_max <= 0.0) return false;
     log_ray(gl_RayFlagsTerminateOnFirstHitEXT, o, 0.0, d, t_max);
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, o, 0.0, d, t_max);
-    while (rayQueryProceedEXT(q)) {}
+    rayQueryInitializeEXT(q, tlas, TRACE_FLAGS | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, o, 0.0, d, t_max);
+    run_query(q);
     return rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionNoneEXT;
 }
 
@@ -322,8 +361,8 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         secondary_rays++;
         log_ray(0u, r.origin, 0.0, r.dir, 1e30);
         rayQueryEXT q;
-        rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, r.origin, 0.0, r.dir, 1e30);
-        while (rayQueryProceedEXT(q)) {}
+        rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, r.origin, 0.0, r.dir, 1e30);
+        run_query(q);
         bool hit = rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
         float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
         float light_density;
@@ -409,8 +448,8 @@ void main() {
                        t_range);
             log_ray(0u, o, t_range.x, d, t_range.y);
             rayQueryEXT q;
-            rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, 0xFF, o, t_range.x, d, t_range.y);
-            while (rayQueryProceedEXT(q)) {}
+            rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, o, t_range.x, d, t_range.y);
+            run_query(q);
             if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
                 Surface s = hit_surface(q, -d, true);
                 value = vec4(shade_visible(s, -d, r, chain, shadow_rays), 1.0);

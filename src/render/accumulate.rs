@@ -41,7 +41,9 @@ pub struct AccumulateInputs<'a> {
 
 impl AccumulatePass {
     /// `primary_rays`: trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
-    pub fn new(device: &Arc<Device>, texture_count: u32, primary_rays: bool) -> Result<Self> {
+    /// `alpha_tested`: some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is
+    /// forced opaque and the pipeline carries no alpha test.
+    pub fn new(device: &Arc<Device>, texture_count: u32, primary_rays: bool, alpha_tested: bool) -> Result<Self> {
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
             Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: 6 },
@@ -60,7 +62,7 @@ impl AccumulatePass {
             ("accumulate.comp", shaders::ACCUMULATE_COMP),
             &bindings,
             std::mem::size_of::<AccumulatePush>() as u32,
-            &[u32::from(primary_rays)],
+            &[u32::from(primary_rays), u32::from(alpha_tested)],
         )?;
         let gbuffer_sampler = Sampler::new(
             device,

@@ -216,7 +216,7 @@ pub fn render_frame(
     let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
-    let accumulate = AccumulatePass::new(device, texture_count, traced)?;
+    let accumulate = AccumulatePass::new(device, texture_count, traced, ray_scene.alpha_tested)?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
         gbuffer: &gbuffer,

@@ -2,7 +2,7 @@
 //! primitive records the accumulation shader reads at a hit. Instances go into a TLAS per sample time.
 use super::accumulate_layout::GpuPrimitiveRecord;
 use super::gpu_scene::GpuScene;
-use crate::scene::Scene;
+use crate::scene::{AlphaMode, Scene};
 use crate::vk::accel::{AccelerationStructure, TlasInstance, TriangleGeometry};
 use crate::vk::{Buffer, Device};
 use anyhow::{Context as _, Result};
@@ -16,6 +16,9 @@ pub struct RayScene {
     pub records: Buffer,
     /// Instances that have geometry, in scene order: what the TLAS holds.
     pub traced_instances: Vec<usize>,
+    /// Some geometry is alpha-tested (glTF MASK or BLEND): not opaque to rays, so ray queries must look at its
+    /// candidate triangles.
+    pub alpha_tested: bool,
 }
 
 impl RayScene {
@@ -23,6 +26,11 @@ impl RayScene {
     pub fn build(device: &Arc<Device>, scene: &Scene, geometry: &GpuScene, default_material: u32) -> Result<Self> {
         let mut blases = Vec::with_capacity(geometry.meshes.len());
         let mut records = Vec::new();
+        // As the raster pass sees them: MASK cuts out below its cutoff, BLEND below 0.5 (gbuffer.frag).
+        let opaque = |material: Option<usize>| {
+            material.and_then(|m| scene.materials.get(m)).is_none_or(|m| m.alpha_mode == AlphaMode::Opaque)
+        };
+        let mut alpha_tested = false;
         for mesh in &geometry.meshes {
             if mesh.primitives.is_empty() {
                 blases.push(None);
@@ -38,9 +46,10 @@ impl RayScene {
                     vertex_count: p.vertex_count,
                     index_address: p.indices.address,
                     triangle_count: p.index_count / 3,
-                    opaque: true,
+                    opaque: opaque(p.material),
                 })
                 .collect();
+            alpha_tested |= geometries.iter().any(|g| !g.opaque);
             for p in &mesh.primitives {
                 records.push(GpuPrimitiveRecord {
                     positions: p.positions.address,
@@ -70,7 +79,7 @@ impl RayScene {
             .filter(|(_, i)| matches!(blases.get(i.mesh), Some(Some(_))))
             .map(|(index, _)| index)
             .collect();
-        Ok(Self { blases, records, traced_instances })
+        Ok(Self { blases, records, traced_instances, alpha_tested })
     }
 
     /// TLAS instances for the scene's instance transforms at one time (`transforms` in scene instance order).
