@@ -64,9 +64,13 @@ struct BenchArgs {
     /// Samples per pixel of the frame benchmark.
     #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
     spp: u32,
-    /// Image size of the frame benchmark.
+    /// Image size of the frame benchmark (its scaling runs use a quarter, half and all of it).
     #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
     size: (u32, u32),
+    /// Run under the Khronos validation layer and exit non-zero on any error or warning: a check that the
+    /// benchmark itself is sound (the layer slows everything, so the figures mean nothing then).
+    #[arg(long)]
+    validate: bool,
     /// Use this device: its index in `strata info`, or part of its name.
     #[arg(long, value_name = "NAME|INDEX")]
     device: Option<String>,
@@ -528,22 +532,37 @@ impl ProgressBar {
 }
 
 fn bench(args: BenchArgs) -> Result<()> {
+    let gpu = || {
+        Gpu::new(&GpuOptions { validation: args.validate, echo_messages: args.validate, device: args.device.clone() })
+    };
+    // Each benchmark's device goes before its validation log is read, so teardown messages count too.
+    let checked = |log: std::sync::Arc<strata::vk::validation::ValidationLog>| -> Result<()> {
+        if args.validate {
+            log.check().map_err(|report| anyhow!("{report}"))?;
+        }
+        Ok(())
+    };
     if args.only != "frame" {
-        bench_gbuffer(&args)?;
+        let gpu = gpu()?;
+        let log = gpu.validation_log();
+        bench_gbuffer(&args, gpu)?;
+        checked(log)?;
     }
     if args.only != "gbuffer" {
         if args.only == "all" {
             println!();
         }
-        bench_frame(&args)?;
+        let gpu = gpu()?;
+        let log = gpu.validation_log();
+        bench_frame(&args, gpu)?;
+        checked(log)?;
     }
     Ok(())
 }
 
-fn bench_frame(args: &BenchArgs) -> Result<()> {
+fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     use strata::bench::{fitted_exponent, time_frame};
     use strata::scene::settings::Primary;
-    let gpu = Gpu::new(&GpuOptions { validation: false, echo_messages: false, device: args.device.clone() })?;
     let (w, h) = args.size;
     let pixels = f64::from(w) * f64::from(h);
     println!(
@@ -626,29 +645,37 @@ fn bench_frame(args: &BenchArgs) -> Result<()> {
     if !scene.has_light() {
         scene.add_default_light();
     }
+    // At the default 512x512: spp over 8-32 at 256x256, pixels over 128^2-512^2 at 8 spp.
+    let part = |divisor: u32| ((w / divisor).max(1), (h / divisor).max(1));
+    let half = part(2);
     let mut by_spp = Vec::new();
     for spp in [8u32, 16, 32] {
         eprint!("\rscaling: {spp} spp ...");
-        let f = time_frame(&gpu, &scene, (256, 256), spp, Primary::Raster, false)?;
+        let f = time_frame(&gpu, &scene, half, spp, Primary::Raster, false)?;
         by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     let mut by_pixels = Vec::new();
-    for side in [128u32, 256, 512] {
-        eprint!("\rscaling: {side}x{side} ...");
-        let f = time_frame(&gpu, &scene, (side, side), 8, Primary::Raster, false)?;
-        by_pixels.push((f64::from(side * side), f.stats.pass_times.unwrap_or_default().total_ms()));
+    for size in [part(4), half, part(1)] {
+        eprint!("\rscaling: {}x{} ...", size.0, size.1);
+        let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, false)?;
+        by_pixels.push((f64::from(size.0 * size.1), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     eprint!("\r\x1b[2K");
+    let quarter = part(4);
     println!(
-        "scaling ({}): GPU frame time ~ spp^{:.2} (8-32 spp at 256x256), ~ pixels^{:.2} (128^2-512^2 at 8 spp)",
+        "scaling ({}): GPU frame time ~ spp^{:.2} (8-32 spp at {}x{}), ~ pixels^{:.2} ({}x{} to {w}x{h} at 8 spp)",
         args.scene.display(),
         fitted_exponent(&by_spp),
-        fitted_exponent(&by_pixels)
+        half.0,
+        half.1,
+        fitted_exponent(&by_pixels),
+        quarter.0,
+        quarter.1
     );
     Ok(())
 }
 
-fn bench_gbuffer(args: &BenchArgs) -> Result<()> {
+fn bench_gbuffer(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     use strata::bench::{time_gbuffer, BumpSetting};
     use strata::scene::BumpDerivative::{Analytic, CentralDifferences};
     let cornell = strata::load_scene(&args.scene)?;
@@ -668,7 +695,6 @@ fn bench_gbuffer(args: &BenchArgs) -> Result<()> {
         node: None,
         world_from_object: glam::Mat4::IDENTITY,
     });
-    let gpu = Gpu::new(&GpuOptions { validation: false, echo_messages: false, device: args.device.clone() })?;
     println!("G-buffer pass, GPU time per sample (median of {} samples) on {}", args.samples, gpu.device.report.name);
     println!("{:<12} {:>10} {:>10} {:<22} {:>10}", "scene", "size", "triangles", "bump", "ms/sample");
     let cases = [

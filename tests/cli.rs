@@ -355,3 +355,49 @@ fn ctrl_c_stops_the_render_and_writes_nothing() {
     assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
 }
+
+/// The frame benchmark runs end to end under the validation layer on a tiny image and prints every figure it
+/// promises, each a finite positive number: per-pass times, both probe ratios, memory and the scaling fits.
+#[test]
+fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(repo)
+        .args(["bench", "--only", "frame", "--size", "48x32", "--spp", "2", "--validate"])
+        .output()
+        .expect("run strata bench");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "strata bench failed:\n{}\n{text}", stderr(&out));
+    // Every number after one of these labels, per scene.
+    let number_after = |line: &str, label: &str| -> f64 {
+        let rest = &line[line.find(label).unwrap_or_else(|| panic!("no {label:?} in {line:?}")) + label.len()..];
+        let token: String = rest.trim_start().chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+        token.parse().unwrap_or_else(|_| panic!("no number after {label:?} in {line:?}"))
+    };
+    for scene in ["scenes/cornell.toml:", "scenes/showcase.toml:"] {
+        let start = text.find(scene).unwrap_or_else(|| panic!("no {scene} section in:\n{text}"));
+        let section: Vec<&str> = text[start..].lines().skip(1).take(7).collect();
+        let find = |prefix: &str| {
+            *section
+                .iter()
+                .find(|l| l.trim_start().starts_with(prefix))
+                .unwrap_or_else(|| panic!("{scene} has no {prefix:?} line:\n{text}"))
+        };
+        let times = find("GPU ms per sample");
+        for label in ["TLAS", "G-buffer", "accumulate", "resolve"] {
+            assert!(number_after(times, label) > 0.0, "{scene} {label} time in {times:?}");
+        }
+        let probe = find("accumulate ");
+        assert!(number_after(probe, "closest hit):") > 0.0, "{probe}");
+        let replay = find("accumulate vs the probe replaying");
+        assert!(number_after(replay, "M rays/s,") > 0.0, "{replay}");
+        assert!(number_after(find("reference mode"), "frame") > 0.0);
+        assert!(number_after(find("device memory"), "=") > 0.0);
+    }
+    let scaling = text.lines().find(|l| l.starts_with("scaling")).unwrap_or_else(|| panic!("no scaling line:\n{text}"));
+    for label in ["spp^", "pixels^"] {
+        let rest = &scaling[scaling.find(label).unwrap() + label.len()..];
+        let token: String = rest.chars().take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-').collect();
+        assert!(token.parse::<f64>().is_ok_and(f64::is_finite), "{label} in {scaling:?}");
+    }
+}
