@@ -165,6 +165,11 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
     float p = l.cone.w;
     if (!(p > 0.0)) return vec3(0.0);
     LightSample ls = sample_light(l, s.position, sample2(pixel, dim + 1u));
+    if (l.position_kind.w == LIGHT_TRIANGLE && l.uv2_texture.z >= 0.0) {
+        // An emissive texture scales the radiance where the sample landed (hit_surface reads it the same way).
+        vec2 uv = (1.0 - ls.bary.x - ls.bary.y) * l.uv01.xy + ls.bary.x * l.uv01.zw + ls.bary.y * l.uv2_texture.xy;
+        ls.value *= textureLod(textures[nonuniformEXT(int(l.uv2_texture.z))], uv, 0.0).rgb;
+    }
     if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
     vec3 diffuse;
     vec3 specular;
@@ -283,8 +288,9 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
     face_viewer(s, v);
-    // Matches render/lights.rs: uniform-emission surfaces are lights, one-sided ones only from the front.
-    bool sampled = m.emissive_texture < 0 && luminance(m.emissive.rgb) > 0.0 && (m.double_sided != 0 || !s.inside);
+    // Matches render/lights.rs: emissive surfaces are lights chosen by their factor's power (a texture scales
+    // what a sample brings, not how often it is chosen), one-sided ones only from the front.
+    bool sampled = luminance(m.emissive.rgb) > 0.0 && (m.double_sided != 0 || !s.inside);
     s.emitter_density = sampled ? PI * luminance(m.emissive.rgb) * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
     return s;
 }

@@ -17,6 +17,8 @@ struct GpuLight {
     vec4 normal;         // xyz direction of travel, w two-sided
     vec4 emission;       // rgb, w selection CDF (inclusive)
     vec4 cone;           // x cos outer, y cos inner, z range of points and spots (0: infinite), w selection probability
+    vec4 uv01;           // emissive triangles: UVs of p0 (xy) and p1 (zw)
+    vec4 uv2_texture;    // emissive triangles: UV of p2 (xy), z emissive texture (-1: none)
 };
 
 struct GpuPrimitiveRecord {

@@ -13,6 +13,7 @@ struct LightSample {
     vec3 value;  // incident radiance / pdf (solid angle), or intensity / d² for delta lights
     float pdf;   // solid-angle density of the direction (0 for delta lights)
     bool delta;  // a point or directional light: no area, the specular lobe is evaluated directly
+    vec2 bary;   // triangles: the sampled point's barycentrics of p1 and p2
 };
 
 // KHR_lights_punctual's smooth spot falloff for a light shining along `axis`, seen in direction `to_point`.
@@ -53,6 +54,7 @@ LightSample sample_light(GpuLight l, vec3 x, vec2 u) {
     s.delta = false;
     s.dist = 0.0;
     s.dir = vec3(0.0, 1.0, 0.0);
+    s.bary = vec2(0.0);
     float kind = l.position_kind.w;
     vec3 c = l.position_kind.xyz;
     if (kind == LIGHT_DIRECTIONAL) {
@@ -120,7 +122,8 @@ LightSample sample_light(GpuLight l, vec3 x, vec2 u) {
     } else {
         // Triangle: uniform barycentrics (Osada et al. 2002).
         float su = sqrt(u.x);
-        y = c + su * (1.0 - u.y) * l.axis_u.xyz + su * u.y * l.axis_v.xyz;
+        s.bary = vec2(su * (1.0 - u.y), su * u.y);
+        y = c + s.bary.x * l.axis_u.xyz + s.bary.y * l.axis_v.xyz;
     }
     vec3 d = y - x;
     float dist2 = dot(d, d);

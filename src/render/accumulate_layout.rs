@@ -33,6 +33,10 @@ pub struct GpuLight {
     /// x: cos(outer cone), y: cos(inner cone) for spots; z: range of points and spots (0: infinite); w: the
     /// probability of selecting it.
     pub cone: Vec4,
+    /// Emissive triangles: the UVs of p0 (xy) and p1 (zw).
+    pub uv01: Vec4,
+    /// Emissive triangles: the UV of p2 (xy); z: the emissive texture scaling the radiance, -1 for none.
+    pub uv2_texture: Vec4,
 }
 
 /// What the shader needs to shade a ray's hit on a primitive: its vertex streams by device address
@@ -124,7 +128,8 @@ mod tests {
 
     #[test]
     fn layouts_match_the_glsl_structs() {
-        assert_eq!(size_of::<GpuLight>(), 96);
+        assert_eq!(size_of::<GpuLight>(), 128);
+        assert_eq!(offset_of!(GpuLight, uv2_texture), 112);
         assert_eq!(offset_of!(GpuLight, emission), 64);
         assert_eq!(size_of::<GpuPrimitiveRecord>(), 64);
         assert_eq!(offset_of!(GpuPrimitiveRecord, dpdv), 48);

@@ -4,7 +4,7 @@
 //! shader intersects those analytically along specular rays; emissive triangles are in the TLAS.
 use super::accumulate_layout::{light_kind, GpuLight};
 use crate::scene::{LightShape, Scene};
-use glam::{Mat3, Mat4, Vec3, Vec4};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
 
 /// Emissive triangles beyond this many are still seen and reflected, but not sampled as lights (a warning says
@@ -56,6 +56,8 @@ impl LightSet {
                 emission: e.extend(0.0),
                 // KHR_lights_punctual: range is not scaled by the node's transform.
                 cone: Vec4::new(0.0, 0.0, light.range.max(0.0), 0.0),
+                uv01: Vec4::ZERO,
+                uv2_texture: Vec4::new(0.0, 0.0, -1.0, 0.0),
             };
             let power = match light.shape {
                 LightShape::Point { radius } => {
@@ -106,11 +108,15 @@ impl LightSet {
             let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
             for primitive in &scene.meshes[instance.mesh].primitives {
                 let Some(material) = primitive.material.and_then(|m| scene.materials.get(m)) else { continue };
-                // Emissive textures vary over the surface; sampling by the factor alone would be biased, so such
-                // surfaces only shine where rays see them.
-                if luminance(material.emissive) <= 0.0 || material.emissive_texture.is_some() {
+                // Chosen by the factor's power; an emissive texture scales the radiance at the sampled point
+                // (the shader evaluates it there), which keeps the estimate unbiased.
+                if luminance(material.emissive) <= 0.0 {
                     continue;
                 }
+                let texture = material
+                    .emissive_texture
+                    .filter(|t| t.texture < scene.textures.len())
+                    .map_or(-1.0, |t| t.texture as f32);
                 for tri in primitive.indices.chunks_exact(3) {
                     if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
                         skipped_triangles += primitive.indices.len() / 3;
@@ -121,6 +127,7 @@ impl LightSet {
                         continue;
                     };
                     let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
+                    let uv = [0, 1, 2].map(|k| primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
                     let (e1, e2) = (p1 - p0, p2 - p0);
                     let cross = e1.cross(e2);
                     let area = 0.5 * cross.length();
@@ -143,6 +150,8 @@ impl LightSet {
                         normal: n.extend(if two_sided { 1.0 } else { 0.0 }),
                         emission: material.emissive.extend(0.0),
                         cone: Vec4::ZERO,
+                        uv01: uv[0].extend(uv[1].x).extend(uv[1].y),
+                        uv2_texture: uv[2].extend(texture).extend(0.0),
                     });
                     powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
                 }
