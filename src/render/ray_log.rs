@@ -35,7 +35,8 @@ impl RayLog {
 
     /// The rays logged, in the order the pass cast them (once the GPU is done and its writes are host-visible).
     pub fn rays(&self) -> Result<Vec<ProbeRay>> {
-        let bytes: Vec<u8> = self.buffer.read()?;
+        // Only the logged rays are copied out of the mapping, not the whole (up to tens of MB) buffer.
+        let bytes = self.buffer.mapped()?;
         let header: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..HEADER_BYTES as usize]);
         let count = header[0];
         if count > self.capacity {
