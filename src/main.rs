@@ -42,7 +42,8 @@ enum Command {
     /// whole frames (per-pass times; rays/s against bare ray-query probes: camera rays, and a replay of the very
     /// rays one sample cast; scaling with spp and pixels; memory).
     #[command(after_help = "Figures vary with the machine and its load; compare the ratios printed in one run.\n\n\
-                            Examples:\n  strata bench\n  strata bench --samples 9 --scene scenes/cornell.toml")]
+                            Examples:\n  strata bench\n  strata bench --samples 9 --scene scenes/cornell.toml\n  \
+                            strata bench --only frame --size 64x64 --spp 2 --validate   # is the benchmark sound?")]
     Bench(BenchArgs),
 }
 
