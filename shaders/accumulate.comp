@@ -44,25 +44,47 @@ layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec4Array { vec4 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
 
+// A triangle a ray query met: its primitive record, vertex indices and barycentric weights. The query's getters
+// take their candidate/committed choice as a constant, so callers read them and pass the values.
+struct TriangleHit {
+    GpuPrimitiveRecord r;
+    uint i0;
+    uint i1;
+    uint i2;
+    vec3 w;
+};
+
+TriangleHit triangle_hit(int record, uint tri, vec2 bc) {
+    TriangleHit h;
+    h.r = primitives[record];
+    UintArray indices = UintArray(h.r.indices);
+    h.i0 = indices.v[3u * tri];
+    h.i1 = indices.v[3u * tri + 1u];
+    h.i2 = indices.v[3u * tri + 2u];
+    h.w = vec3(1.0 - bc.x - bc.y, bc.x, bc.y);
+    return h;
+}
+
+vec2 hit_uv(TriangleHit h) {
+    Vec2Array uvs = Vec2Array(h.r.uvs);
+    return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
+}
+
+vec4 hit_color(TriangleHit h) {
+    Vec4Array colors = Vec4Array(h.r.colors);
+    return h.w.x * colors.v[h.i0] + h.w.y * colors.v[h.i1] + h.w.z * colors.v[h.i2];
+}
+
 // Whether a candidate triangle of alpha-tested geometry covers its point: the rule of gbuffer.frag's discard
 // (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
 bool alpha_covers(rayQueryEXT q) {
-    int record = rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false);
-    uint tri = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false));
-    vec2 bc = rayQueryGetIntersectionBarycentricsEXT(q, false);
-    GpuPrimitiveRecord r = primitives[record];
-    GpuMaterial m = materials[r.material];
-    UintArray indices = UintArray(r.indices);
-    uint i0 = indices.v[3u * tri];
-    uint i1 = indices.v[3u * tri + 1u];
-    uint i2 = indices.v[3u * tri + 2u];
-    vec3 w = vec3(1.0 - bc.x - bc.y, bc.x, bc.y);
-    Vec4Array colors = Vec4Array(r.colors);
-    float alpha = m.base_color.a * (w.x * colors.v[i0].a + w.y * colors.v[i1].a + w.z * colors.v[i2].a);
+    TriangleHit h = triangle_hit(
+        rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false),
+        uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)), rayQueryGetIntersectionBarycentricsEXT(q, false));
+    GpuMaterial m = materials[h.r.material];
+    float alpha = m.base_color.a * hit_color(h).a;
     if (m.base_color_texture >= 0) {
-        Vec2Array uvs = Vec2Array(r.uvs);
-        vec2 uv = w.x * uvs.v[i0] + w.y * uvs.v[i1] + w.z * uvs.v[i2];
-        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0).a;
+        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, hit_uv(h)), 0.0).a;
     }
     return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
 }
@@ -218,49 +240,42 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
 // bump and double-sided faces turned to the viewer, so both modes agree. Deeper hits skip that detail: it costs
 // more than it shows after a gloss or translucency bounce.
 Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
-    int record = rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true);
-    uint tri = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true));
-    vec2 bc = rayQueryGetIntersectionBarycentricsEXT(q, true);
+    TriangleHit h = triangle_hit(
+        rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true),
+        uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true)), rayQueryGetIntersectionBarycentricsEXT(q, true));
     mat4x3 world_from_object = rayQueryGetIntersectionObjectToWorldEXT(q, true);
-    GpuPrimitiveRecord r = primitives[record];
-    UintArray indices = UintArray(r.indices);
-    uint i0 = indices.v[3u * tri];
-    uint i1 = indices.v[3u * tri + 1u];
-    uint i2 = indices.v[3u * tri + 2u];
-    vec3 w = vec3(1.0 - bc.x - bc.y, bc.x, bc.y);
-    Vec3Array positions = Vec3Array(r.positions);
-    vec3 p0 = positions.v[i0];
-    vec3 p1 = positions.v[i1];
-    vec3 p2 = positions.v[i2];
-    Vec3Array normals = Vec3Array(r.normals);
-    vec3 n_object = w.x * normals.v[i0] + w.y * normals.v[i1] + w.z * normals.v[i2];
-    Vec2Array uvs = Vec2Array(r.uvs);
-    vec2 uv = w.x * uvs.v[i0] + w.y * uvs.v[i1] + w.z * uvs.v[i2];
+    Vec3Array positions = Vec3Array(h.r.positions);
+    vec3 p0 = positions.v[h.i0];
+    vec3 p1 = positions.v[h.i1];
+    vec3 p2 = positions.v[h.i2];
+    Vec3Array normals = Vec3Array(h.r.normals);
+    vec3 n_object = h.w.x * normals.v[h.i0] + h.w.y * normals.v[h.i1] + h.w.z * normals.v[h.i2];
+    vec2 uv = hit_uv(h);
 
     mat3 m3 = mat3(world_from_object);
     // Normals transform by the cofactor matrix (det · inverse transpose); the sign keeps mirrored instances right.
     mat3 cofactor = mat3(cross(m3[1], m3[2]), cross(m3[2], m3[0]), cross(m3[0], m3[1]));
     float det_sign = dot(m3[0], cross(m3[1], m3[2])) < 0.0 ? -1.0 : 1.0;
     Surface s;
-    s.position = world_from_object * vec4(w.x * p0 + w.y * p1 + w.z * p2, 1.0);
+    s.position = world_from_object * vec4(h.w.x * p0 + h.w.y * p1 + h.w.z * p2, 1.0);
     vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));
     s.geometric = normalize(ng);
     vec3 ns = det_sign * (cofactor * n_object);
     s.normal = dot(ns, ns) > 0.0 ? normalize(ns) : s.geometric;
     if (dot(s.normal, s.geometric) < 0.0) s.geometric = -s.geometric;
 
-    GpuMaterial m = materials[r.material];
+    GpuMaterial m = materials[h.r.material];
     vec4 base = m.base_color;
-    if (visible) base *= w.x * Vec4Array(r.colors).v[i0] + w.y * Vec4Array(r.colors).v[i1] + w.z * Vec4Array(r.colors).v[i2];
+    if (visible) base *= hit_color(h);
     if (m.base_color_texture >= 0) {
         base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0);
     }
     if (visible) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
-        Vec3Array dpdus = Vec3Array(r.dpdu);
-        Vec3Array dpdvs = Vec3Array(r.dpdv);
-        vec3 dpdu = m3 * (w.x * dpdus.v[i0] + w.y * dpdus.v[i1] + w.z * dpdus.v[i2]);
-        vec3 dpdv = m3 * (w.x * dpdvs.v[i0] + w.y * dpdvs.v[i1] + w.z * dpdvs.v[i2]);
+        Vec3Array dpdus = Vec3Array(h.r.dpdu);
+        Vec3Array dpdvs = Vec3Array(h.r.dpdv);
+        vec3 dpdu = m3 * (h.w.x * dpdus.v[h.i0] + h.w.y * dpdus.v[h.i1] + h.w.z * dpdus.v[h.i2]);
+        vec3 dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
         vec3 n = s.normal;
         if (m.normal_texture >= 0) {
             vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], uv, 0.0).xyz;
@@ -277,13 +292,13 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     s.emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], uv, 0.0).rgb;
     s.m.albedo = base.rgb;
-    s.m.metallic = m.metallic;
-    s.m.roughness = m.roughness;
+    // Metalness in B, roughness in G (glTF 2.0 §3.9.2), as gbuffer.frag reads them.
+    vec2 metallic_roughness = vec2(m.metallic, m.roughness);
     if (m.metallic_roughness_texture >= 0) {
-        vec4 texel = textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)], uv, 0.0);
-        s.m.metallic *= texel.b;
-        s.m.roughness *= texel.g;
+        metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)], uv, 0.0).bg;
     }
+    s.m.metallic = metallic_roughness.x;
+    s.m.roughness = metallic_roughness.y;
     s.m.transmission = m.transmission;
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;

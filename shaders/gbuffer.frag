@@ -65,16 +65,13 @@ void main() {
     out_geometric_normal = vec4(geometric, 0.0);
     out_albedo = base;
     // Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); ray hits do the same (accumulate.comp).
-    float metallic = m.metallic;
-    float roughness = m.roughness;
+    vec2 metallic_roughness = vec2(m.metallic, m.roughness);  // metalness in B, roughness in G
     if (m.metallic_roughness_texture >= 0) {
-        vec4 texel = texture(textures[nonuniformEXT(m.metallic_roughness_texture)], in_uv);
-        metallic *= texel.b;
-        roughness *= texel.g;
+        metallic_roughness *= texture(textures[nonuniformEXT(m.metallic_roughness_texture)], in_uv).bg;
     }
     vec3 emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) emission *= texture(textures[nonuniformEXT(m.emissive_texture)], in_uv).rgb;
-    out_material = vec4(metallic, roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
+    out_material = vec4(metallic_roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
     out_emission = vec4(emission, 0.0);
     out_ids = uvec2(d.instance + 1u, d.material);
 }
