@@ -533,30 +533,29 @@ impl ProgressBar {
 }
 
 fn bench(args: BenchArgs) -> Result<()> {
-    let gpu = || {
-        Gpu::new(&GpuOptions { validation: args.validate, echo_messages: args.validate, device: args.device.clone() })
-    };
-    // Each benchmark's device goes before its validation log is read, so teardown messages count too.
-    let checked = |log: std::sync::Arc<strata::vk::validation::ValidationLog>| -> Result<()> {
+    // Each benchmark on its own device; the device goes before its validation log is read, so teardown messages
+    // count too.
+    let run = |benchmark: fn(&BenchArgs, Gpu) -> Result<()>| -> Result<()> {
+        let gpu = Gpu::new(&GpuOptions {
+            validation: args.validate,
+            echo_messages: args.validate,
+            device: args.device.clone(),
+        })?;
+        let log = gpu.validation_log();
+        benchmark(&args, gpu)?;
         if args.validate {
             log.check().map_err(|report| anyhow!("{report}"))?;
         }
         Ok(())
     };
     if args.only != "frame" {
-        let gpu = gpu()?;
-        let log = gpu.validation_log();
-        bench_gbuffer(&args, gpu)?;
-        checked(log)?;
+        run(bench_gbuffer)?;
     }
     if args.only != "gbuffer" {
         if args.only == "all" {
             println!();
         }
-        let gpu = gpu()?;
-        let log = gpu.validation_log();
-        bench_frame(&args, gpu)?;
-        checked(log)?;
+        run(bench_frame)?;
     }
     Ok(())
 }
@@ -648,7 +647,7 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     }
     // At the default 512x512: spp over 8-32 at 256x256, pixels over 128^2-512^2 at 8 spp.
     let part = |divisor: u32| ((w / divisor).max(1), (h / divisor).max(1));
-    let half = part(2);
+    let (quarter, half) = (part(4), part(2));
     let mut by_spp = Vec::new();
     for spp in [8u32, 16, 32] {
         eprint!("\rscaling: {spp} spp ...");
@@ -656,13 +655,12 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     let mut by_pixels = Vec::new();
-    for size in [part(4), half, part(1)] {
+    for size in [quarter, half, (w, h)] {
         eprint!("\rscaling: {}x{} ...", size.0, size.1);
         let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, false)?;
         by_pixels.push((f64::from(size.0 * size.1), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     eprint!("\r\x1b[2K");
-    let quarter = part(4);
     println!(
         "scaling ({}): GPU frame time ~ spp^{:.2} (8-32 spp at {}x{}), ~ pixels^{:.2} ({}x{} to {w}x{h} at 8 spp)",
         args.scene.display(),
