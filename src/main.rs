@@ -245,6 +245,7 @@ fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
 }
 
 fn main() -> ExitCode {
+    strata::fatal_signals::report_fatal_signals();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),

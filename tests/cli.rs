@@ -12,6 +12,11 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// How a run ended and what it said: the exit status names a signal where stderr may hold nothing.
+fn outcome(o: &Output) -> String {
+    format!("{}; stderr:\n{}", o.status, stderr(o))
+}
+
 fn samples() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples");
     assert!(dir.is_dir(), "the shared glTF samples are missing at {}", dir.display());
@@ -29,7 +34,7 @@ fn temp_dir(tag: &str) -> PathBuf {
 fn info_lists_a_ray_query_device_and_the_layer() {
     let out = strata(&["info"]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "strata info failed: {}\n{text}", stderr(&out));
+    assert!(out.status.success(), "strata info failed: {}\n{text}", outcome(&out));
     assert!(text.contains("Validation layer: VK_LAYER_KHRONOS_validation"), "{text}");
     assert!(text.contains("ray query: yes"), "{text}");
     assert!(text.contains("strata:    usable"), "{text}");
@@ -53,7 +58,7 @@ fn box_renders_where_its_geometry_projects_with_the_expected_shading() {
         "--preview",
         "--validate",
     ]);
-    assert!(out.status.success(), "render failed:\n{}", stderr(&out));
+    assert!(out.status.success(), "render failed: {}", outcome(&out));
     let image = image::open(&png).unwrap().to_rgba8();
     assert_eq!(image.dimensions(), (width, height));
 
@@ -121,7 +126,7 @@ fn exr_output_holds_linear_radiance() {
         "64x48",
         "--preview",
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", outcome(&out));
     let image = exr::prelude::read_first_rgba_layer_from_file(
         &exr_path,
         |size, _| (size.width(), vec![[0f32; 4]; size.width() * size.height()]),
@@ -220,7 +225,7 @@ fn aovs_are_written_as_exr_layers_and_png_siblings() {
         "normal,depth,height",
         "--validate",
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", outcome(&out));
     let image = exr::prelude::read_all_flat_layers_from_file(&exr_path).unwrap();
     let channels = &image.layer_data[0].channel_data.list;
     let get = |name: &str| match &channels.iter().find(|c| c.name.to_string() == name).unwrap().sample_data {
@@ -256,7 +261,7 @@ fn aovs_are_written_as_exr_layers_and_png_siblings() {
         "--aov",
         "albedo,normal",
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", outcome(&out));
     for name in ["cornell.png", "cornell.albedo.png", "cornell.normal.png"] {
         assert!(dir.join(name).is_file(), "{name} missing");
     }
@@ -285,7 +290,7 @@ fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
         "--quiet",
         "--validate",
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", outcome(&out));
     assert!(stderr(&out).trim().is_empty(), "--quiet prints nothing on stderr: {}", stderr(&out));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
     assert_eq!(summary["spp"], 4);
@@ -324,7 +329,7 @@ fn primary_rays_are_traced_per_pixel_when_asked_and_a_wrong_mode_is_named() {
         ])
     };
     let out = run("rays");
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.status.success(), "{}", outcome(&out));
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
     assert_eq!(summary["primary"], "rays");
     assert_eq!(summary["camera_rays"], 48 * 30 * 3, "one camera ray per pixel and sample");
@@ -356,6 +361,28 @@ fn ctrl_c_stops_the_render_and_writes_nothing() {
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
 }
 
+/// A crash in native code (the driver, a layer) is named on stderr, and the signal still ends the process, so the
+/// exit status says so too. A real driver crash cannot be had on demand; the signal a crash raises can.
+#[test]
+fn a_fatal_signal_is_named_on_stderr_and_still_ends_the_process() {
+    use std::os::unix::process::ExitStatusExt as _;
+    let dir = temp_dir("crash");
+    let png = dir.join("never.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
+    let child = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .args(["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "320x180", "--spp", "4096"])
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run strata");
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let kill = Command::new("kill").args(["-SEGV", &child.id().to_string()]).status().expect("kill");
+    assert!(kill.success());
+    let out = child.wait_with_output().expect("wait");
+    assert_eq!(out.status.signal(), Some(11), "{}", outcome(&out));
+    assert!(stderr(&out).contains("strata: crashed with SIGSEGV"), "{}", outcome(&out));
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
+}
+
 /// The frame benchmark runs end to end under the validation layer on a tiny image and prints every figure it
 /// promises, each a finite positive number: per-pass times, both probe ratios, memory and the scaling fits.
 #[test]
@@ -367,7 +394,7 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
         .output()
         .expect("run strata bench");
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(out.status.success(), "strata bench failed:\n{}\n{text}", stderr(&out));
+    assert!(out.status.success(), "strata bench failed: {}\n{text}", outcome(&out));
     // Every number after one of these labels, per scene.
     let number_after = |line: &str, label: &str| -> f64 {
         let rest = &line[line.find(label).unwrap_or_else(|| panic!("no {label:?} in {line:?}")) + label.len()..];
