@@ -278,8 +278,11 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         vec3 dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
         vec3 n = s.normal;
         if (m.normal_texture >= 0) {
-            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], uv, 0.0).xyz;
-            n = normal_from_texture(n, dpdu, dpdv, texel, m.normal_scale);
+            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, uv), 0.0).xyz;
+            vec3 map_dpdu = dpdu;
+            vec3 map_dpdv = dpdv;
+            transform_derivatives(m.normal_uv_rows, map_dpdu, map_dpdv);
+            n = normal_from_texture(n, map_dpdu, map_dpdv, texel, m.normal_scale);
         }
         if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_height_and_gradient(m.bump, uv).yz);
         s.normal = n;
@@ -290,16 +293,23 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         }
     }
     s.emission = m.emissive.rgb;
-    if (m.emissive_texture >= 0) s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], uv, 0.0).rgb;
+    if (m.emissive_texture >= 0) {
+        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, uv), 0.0).rgb;
+    }
     s.m.albedo = base.rgb;
     // Metalness in B, roughness in G (glTF 2.0 §3.9.2), as gbuffer.frag reads them.
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);
     if (m.metallic_roughness_texture >= 0) {
-        metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)], uv, 0.0).bg;
+        metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)],
+                                         transform_uv(m.metallic_roughness_uv_rows, uv), 0.0).bg;
     }
     s.m.metallic = metallic_roughness.x;
     s.m.roughness = metallic_roughness.y;
     s.m.transmission = m.transmission;
+    if (m.transmission_texture >= 0) {
+        s.m.transmission *= textureLod(textures[nonuniformEXT(m.transmission_texture)],
+                                       transform_uv(m.transmission_uv_rows, uv), 0.0).r;
+    }
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
     face_viewer(s, v);

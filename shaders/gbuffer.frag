@@ -44,8 +44,11 @@ void main() {
     if (!(n_len > 0.0)) n = geometric;
 
     if (m.normal_texture >= 0) {
-        vec3 texel = texture(textures[nonuniformEXT(m.normal_texture)], in_uv).xyz;
-        n = normal_from_texture(n, in_dpdu, in_dpdv, texel, m.normal_scale);
+        vec3 texel = texture(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, in_uv)).xyz;
+        vec3 dpdu = in_dpdu;
+        vec3 dpdv = in_dpdv;
+        transform_derivatives(m.normal_uv_rows, dpdu, dpdv);
+        n = normal_from_texture(n, dpdu, dpdv, texel, m.normal_scale);
     }
     float height = 0.0;
     vec3 shading = normalize(n);
@@ -67,11 +70,19 @@ void main() {
     // Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); ray hits do the same (accumulate.comp).
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);  // metalness in B, roughness in G
     if (m.metallic_roughness_texture >= 0) {
-        metallic_roughness *= texture(textures[nonuniformEXT(m.metallic_roughness_texture)], in_uv).bg;
+        metallic_roughness *= texture(textures[nonuniformEXT(m.metallic_roughness_texture)],
+                                      transform_uv(m.metallic_roughness_uv_rows, in_uv)).bg;
     }
     vec3 emission = m.emissive.rgb;
-    if (m.emissive_texture >= 0) emission *= texture(textures[nonuniformEXT(m.emissive_texture)], in_uv).rgb;
-    out_material = vec4(metallic_roughness, m.transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
+    if (m.emissive_texture >= 0) {
+        emission *= texture(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, in_uv)).rgb;
+    }
+    float transmission = m.transmission;
+    if (m.transmission_texture >= 0) {
+        transmission *=
+            texture(textures[nonuniformEXT(m.transmission_texture)], transform_uv(m.transmission_uv_rows, in_uv)).r;
+    }
+    out_material = vec4(metallic_roughness, transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
     out_emission = vec4(emission, 0.0);
     out_ids = uvec2(d.instance + 1u, d.material);
 }

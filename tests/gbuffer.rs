@@ -366,3 +366,83 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     drop(pass);
     gpu.finish().unwrap();
 }
+
+/// KHR_texture_transform applies to every texture the pass reads, and the transmission texture's R channel
+/// scales its factor. Each texture holds two texels, left and right; the transforms (offset 0.55, scale 0.4 in
+/// u) send the whole plane to the right one, so an untransformed lookup shows as the left texel on half of it. A
+/// normal texture turned a quarter turn tilts the normal along the surface's ∂p/∂v instead of ∂p/∂u: its
+/// tangent frame turns with it.
+#[test]
+fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_their_factor() {
+    use strata::output::srgb_to_linear;
+    use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+    let gpu = common::GpuTest::new();
+    let pass = GBufferPass::new(gpu.device(), 3).unwrap();
+    let white = [255u8; 4];
+    // Right texels: roughness in G, metalness in B, transmission in R (linear); the emissive one is sRGB.
+    let data = [128u8, 153, 51, 255];
+    let emissive = [188u8, 128, 64, 255];
+    let tilt_u = [255u8, 128, 128, 255];
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, Lens::PINHOLE);
+    let mut scene = scene_of(plane(Vec2::splat(2.0), Vec2::ONE, None), Mat4::IDENTITY, None, cam);
+    let halves = |name: &str, right: [u8; 4]| TextureImage {
+        name: name.into(),
+        width: 2,
+        height: 1,
+        rgba8: [white, right].concat(),
+    };
+    let tilted = TextureImage { name: "normal".into(), width: 2, height: 1, rgba8: [tilt_u, tilt_u].concat() };
+    scene.images = vec![halves("data", data), halves("emissive", emissive), tilted];
+    let nearest =
+        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    let texture = |name: &str, image: usize, srgb: bool| Texture { name: name.into(), image, sampler: nearest, srgb };
+    scene.textures = vec![texture("data", 0, false), texture("emissive", 1, true), texture("normal", 2, false)];
+    let right = Some(UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) });
+    let quarter_turn =
+        Some(UvTransform { offset: Vec2::ZERO, rotation: std::f32::consts::FRAC_PI_2, scale: Vec2::ONE });
+    let uses = |texture: usize, transform: Option<UvTransform>| Some(TextureRef { texture, tex_coord: 0, transform });
+    let m = &mut scene.materials[0];
+    (m.metallic, m.roughness, m.transmission, m.emissive) = (0.5, 0.8, 0.6, Vec3::new(2.0, 1.0, 0.5));
+    m.metallic_roughness_texture = uses(0, right);
+    m.transmission_texture = uses(0, right);
+    m.emissive_texture = uses(1, right);
+    m.normal_texture = uses(2, quarter_turn);
+    let primitive = &scene.meshes[0].primitives[0];
+    let (dpdu, dpdv) = (primitive.dpdu[0], primitive.dpdv[0]);
+    assert!(dpdu.cross(dpdv).length() > 0.1, "the plane needs a tangent frame: {dpdu} {dpdv}");
+    let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
+    let (metallic, roughness, transmission) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0, 0.6 * 128.0 / 255.0);
+    let emission =
+        Vec3::new(2.0, 1.0, 0.5) * Vec3::from_array([0, 1, 2].map(|i| srgb_to_linear(f32::from(emissive[i]) / 255.0)));
+    // A quarter turn (KHR_texture_transform's rotation) makes ∂p/∂u' = ∂p/∂v: the texel's +x tilt follows ∂p/∂v.
+    let n = Vec3::Y;
+    let expected_normal = (dpdv - n * n.dot(dpdv)).normalize();
+    let mut covered = 0;
+    for y in 0..16 {
+        for x in 0..16 {
+            if !frame.covered(x, y) {
+                continue;
+            }
+            covered += 1;
+            let mat = frame.at(MATERIAL, x, y);
+            let step = 0.5 / 255.0 + 1e-4;
+            assert!(
+                (mat[0] - metallic).abs() < step
+                    && (mat[1] - roughness).abs() < step
+                    && (mat[2] - transmission).abs() < step,
+                "({x}, {y}): material {mat:?}"
+            );
+            let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+            assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+            let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
+            assert!(
+                (normal - expected_normal).length() < 0.02,
+                "({x}, {y}): normal {normal}, expected {expected_normal}"
+            );
+        }
+    }
+    assert!(covered > 100, "{covered} pixels covered");
+    drop(pass);
+    gpu.finish().unwrap();
+}

@@ -40,11 +40,15 @@ fn document(buffer_entry: Value) -> Value {
             "emissiveFactor": [1, 0.5, 0],
             "extensions": {
                 "KHR_materials_emissive_strength": {"emissiveStrength": 6},
-                "KHR_materials_transmission": {"transmissionFactor": 0.8},
+                "KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0,
+                    "extensions": {"KHR_texture_transform": {"scale": [3, 1]}}}},
                 "KHR_materials_ior": {"ior": 1.33}
             },
             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
-                "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2], "rotation": 0}}}}
+                "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2], "rotation": 0}}}},
+            "normalTexture": {"index": 0, "scale": 0.5,
+                "extensions": {"KHR_texture_transform": {"offset": [0, 0.25], "rotation": 1.5707964}}},
+            "emissiveTexture": {"index": 0, "texCoord": 1}
         }],
         "textures": [{"source": 0, "sampler": 0}],
         "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9729}],
@@ -122,6 +126,12 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!((m.transmission, m.ior), (0.8, 1.33));
     let t = m.base_color_texture.unwrap().transform.unwrap();
     assert_eq!(t.apply(Vec2::new(0.25, 0.25)), Vec2::new(1.0, 0.5), "scale 2 then offset (0.5, 0)");
+    // The normal texture's transform comes from its raw extension object (the gltf crate reads textureInfo's only):
+    // rotate a quarter turn, then offset.
+    let n = m.normal_texture.unwrap().transform.unwrap();
+    assert!((n.apply(Vec2::X) - Vec2::new(0.0, -0.75)).length() < 1e-6, "{:?}", n.apply(Vec2::X));
+    let transmission = m.transmission_texture.unwrap().transform.unwrap();
+    assert_eq!(transmission.apply(Vec2::new(0.5, 0.5)), Vec2::new(1.5, 0.5));
     let sampler = scene.textures[0].sampler;
     assert_eq!(
         (sampler.wrap_s, sampler.wrap_t),
@@ -136,8 +146,27 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!(light.shape, LightShape::Spot { inner_cone: 0.2, outer_cone: 0.5, radius: 0.0 });
     assert_eq!(light.emission, Vec3::new(4.0, 2.0, 1.0));
     assert_eq!(light.world_from_light.w_axis.truncate(), Vec3::new(0.0, 3.0, 0.0));
-    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
     assert!(scene.warnings[0].contains("EXT_made_up_extension"));
+    assert!(
+        scene.warnings[1].contains("\"lit glass\": its emissive texture uses TEXCOORD_1"),
+        "{:?}",
+        scene.warnings[1]
+    );
+}
+
+/// A normal texture's transform that is not a KHR_texture_transform object fails with the material's name.
+#[test]
+fn a_malformed_normal_texture_transform_names_its_material() {
+    let dir = temp_dir("bad-transform");
+    let bin = buffer();
+    std::fs::write(dir.join("data.bin"), &bin).unwrap();
+    let mut doc = document(json!({"byteLength": bin.len(), "uri": "data.bin"}));
+    doc["materials"][0]["normalTexture"]["extensions"]["KHR_texture_transform"]["offset"] = json!("left");
+    let path = dir.join("bad.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let error = format!("{:#}", strata::load_scene(&path).unwrap_err());
+    assert!(error.contains("lit glass") && error.contains("KHR_texture_transform"), "{error}");
 }
 
 fn temp_dir(tag: &str) -> std::path::PathBuf {

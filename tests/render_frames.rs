@@ -249,6 +249,49 @@ fn metallic_roughness_textures_shade_like_their_factors_in_both_modes_and_at_ray
     gpu.finish().unwrap();
 }
 
+/// Transmission textures (R scales the factor, KHR_materials_transmission) are read, through their
+/// KHR_texture_transform, in the G-buffer, at the reference mode's visible hits and at the rays' hits. A texture
+/// whose left texel transmits and whose right texel does not, transformed so that every lookup lands on the right
+/// one, must render the showcase exactly as transmission factor 0 does, in both modes.
+#[test]
+fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+    let gpu = GpuTest::new();
+    let original = load(&repo("scenes/showcase.toml"));
+    assert!(original.materials.iter().any(|m| m.transmission > 0.0), "the showcase needs glass for this test");
+    let mut textured = original.clone();
+    textured.images.push(TextureImage {
+        name: "transmits | does not".into(),
+        width: 2,
+        height: 1,
+        rgba8: vec![255, 255, 255, 255, 0, 255, 255, 255],
+    });
+    let nearest =
+        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    textured.textures.push(Texture {
+        name: "transmission halves".into(),
+        image: textured.images.len() - 1,
+        sampler: nearest,
+        srgb: false,
+    });
+    let right_half = UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) };
+    let texture = TextureRef { texture: textured.textures.len() - 1, tex_coord: 0, transform: Some(right_half) };
+    let mut factors = original.clone();
+    for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
+        t.transmission_texture = Some(texture);
+        f.transmission = 0.0;
+    }
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(64, 36, 2, SamplerKind::Jittered) };
+        let with_texture = render(gpu.device(), &textured, &s).linear;
+        let with_factors = render(gpu.device(), &factors, &s).linear;
+        let untouched = render(gpu.device(), &original, &s).linear;
+        assert!(with_texture == with_factors, "{primary:?}: the texture does not act as transmission 0");
+        assert!(with_factors != untouched, "{primary:?}: transmission does not show in this picture");
+    }
+    gpu.finish().unwrap();
+}
+
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
 /// with a sane interval, shadow rays flagged to end at their first hit; and logging leaves the picture untouched.
 #[test]

@@ -34,18 +34,39 @@ struct GpuMaterial {
     int alpha_mode;          // 0 opaque, 1 mask, 2 blend
     int double_sided;
     int base_color_texture;  // -1: none
-    int base_color_tex_coord;
+    int transmission_texture;  // R scales the transmission factor (KHR_materials_transmission); -1: none
     int normal_texture;
     int emissive_texture;
     vec4 base_color_uv_rows[2];
     Bump bump;               // kind BUMP_NONE: no bump
     int metallic_roughness_texture;  // roughness in G, metalness in B (glTF 2.0 §3.9.2); -1: none
+    int pad0;
+    int pad1;
+    int pad2;
+    // Each texture's KHR_texture_transform (transform_uv), identity without one.
+    vec4 metallic_roughness_uv_rows[2];
+    vec4 normal_uv_rows[2];
+    vec4 emissive_uv_rows[2];
+    vec4 transmission_uv_rows[2];
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.
 vec2 transform_uv(vec4 rows[2], vec2 uv) {
     vec3 h = vec3(uv, 1.0);
     return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
+}
+
+// The surface derivatives with respect to a texture's transformed coordinates uv' = A·uv + t: [∂p/∂u' ∂p/∂v'] =
+// [∂p/∂u ∂p/∂v]·A⁻¹, so a rotated or scaled normal texture keeps its tangent frame on the surface.
+void transform_derivatives(vec4 rows[2], inout vec3 dpdu, inout vec3 dpdv) {
+    mat2 a = mat2(rows[0].x, rows[1].x, rows[0].y, rows[1].y);  // columns
+    float det = determinant(a);
+    if (!(abs(det) > 0.0)) return;
+    mat2 inv = inverse(a);
+    vec3 u = dpdu * inv[0].x + dpdv * inv[0].y;
+    vec3 v = dpdu * inv[1].x + dpdv * inv[1].y;
+    dpdu = u;
+    dpdv = v;
 }
 
 // A glTF normal texture (tangent space, glTF 2.0 §3.9.3) tilts the normal n by the texel `texel` (as stored, in

@@ -131,7 +131,8 @@ pub struct GpuMaterial {
     pub alpha_mode: i32,
     pub double_sided: i32,
     pub base_color_texture: i32,
-    pub base_color_tex_coord: i32,
+    /// Its R channel scales the transmission factor (KHR_materials_transmission); -1: none.
+    pub transmission_texture: i32,
     pub normal_texture: i32,
     pub emissive_texture: i32,
     pub base_color_uv_rows: [Vec4; 2],
@@ -139,6 +140,11 @@ pub struct GpuMaterial {
     /// Roughness in G, metalness in B, scaling the factors (glTF 2.0 §3.9.2); -1: none.
     pub metallic_roughness_texture: i32,
     pub pad: [i32; 3],
+    /// Each texture's KHR_texture_transform: the first two rows of its 3×3 matrix (identity without one).
+    pub metallic_roughness_uv_rows: [Vec4; 2],
+    pub normal_uv_rows: [Vec4; 2],
+    pub emissive_uv_rows: [Vec4; 2],
+    pub transmission_uv_rows: [Vec4; 2],
 }
 
 impl GpuMaterial {
@@ -146,7 +152,10 @@ impl GpuMaterial {
         let texture = |t: Option<crate::scene::TextureRef>| {
             t.filter(|t| t.texture < texture_count).map(|t| t.texture as i32).unwrap_or(-1)
         };
-        let uv = m.base_color_texture.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
+        let uv_rows = |t: Option<crate::scene::TextureRef>| {
+            let uv = t.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
+            [uv.row(0).extend(0.0), uv.row(1).extend(0.0)]
+        };
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (0, 0.0),
             AlphaMode::Mask { cutoff } => (1, cutoff),
@@ -164,13 +173,17 @@ impl GpuMaterial {
             alpha_mode,
             double_sided: i32::from(m.double_sided),
             base_color_texture: texture(m.base_color_texture),
-            base_color_tex_coord: m.base_color_texture.map(|t| t.tex_coord as i32).unwrap_or(0),
+            transmission_texture: texture(m.transmission_texture),
             normal_texture: texture(m.normal_texture),
             emissive_texture: texture(m.emissive_texture),
-            base_color_uv_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
+            base_color_uv_rows: uv_rows(m.base_color_texture),
             bump: GpuBump::from_bump(m.bump.as_ref()),
             metallic_roughness_texture: texture(m.metallic_roughness_texture),
             pad: [0; 3],
+            metallic_roughness_uv_rows: uv_rows(m.metallic_roughness_texture),
+            normal_uv_rows: uv_rows(m.normal_texture),
+            emissive_uv_rows: uv_rows(m.emissive_texture),
+            transmission_uv_rows: uv_rows(m.transmission_texture),
         }
     }
 }
@@ -193,8 +206,11 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, base_color_texture), 64);
         assert_eq!(offset_of!(GpuMaterial, base_color_uv_rows), 80);
         assert_eq!(offset_of!(GpuMaterial, bump), 112);
+        assert_eq!(offset_of!(GpuMaterial, transmission_texture), 68);
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness_texture), 144);
-        assert_eq!(size_of::<GpuMaterial>(), 160);
+        assert_eq!(offset_of!(GpuMaterial, metallic_roughness_uv_rows), 160);
+        assert_eq!(offset_of!(GpuMaterial, transmission_uv_rows), 256);
+        assert_eq!(size_of::<GpuMaterial>(), 288);
     }
 
     #[test]

@@ -113,10 +113,11 @@ impl LightSet {
                 if luminance(material.emissive) <= 0.0 {
                     continue;
                 }
-                let texture = material
-                    .emissive_texture
-                    .filter(|t| t.texture < scene.textures.len())
-                    .map_or(-1.0, |t| t.texture as f32);
+                let emissive_texture = material.emissive_texture.filter(|t| t.texture < scene.textures.len());
+                let texture = emissive_texture.map_or(-1.0, |t| t.texture as f32);
+                // The texture's KHR_texture_transform goes into the stored UVs: it is affine, so transforming the
+                // corners and then interpolating equals interpolating and then transforming.
+                let uv_transform = emissive_texture.and_then(|t| t.transform).map(|t| t.matrix());
                 for tri in primitive.indices.chunks_exact(3) {
                     if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
                         skipped_triangles += primitive.indices.len() / 3;
@@ -127,7 +128,10 @@ impl LightSet {
                         continue;
                     };
                     let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
-                    let uv = [0, 1, 2].map(|k| primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
+                    let uv = [0, 1, 2].map(|k| {
+                        let uv = primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO);
+                        uv_transform.map_or(uv, |m| m.transform_point2(uv))
+                    });
                     let (e1, e2) = (p1 - p0, p2 - p0);
                     let cross = e1.cross(e2);
                     let area = 0.5 * cross.length();
@@ -197,6 +201,33 @@ mod tests {
         let total: f32 = set.lights.iter().map(|l| l.cone.w).sum();
         assert!((total - 1.0).abs() < 1e-5);
         assert_eq!(set.lights.last().map(|l| l.emission.w), Some(1.0));
+    }
+
+    /// An emissive texture's KHR_texture_transform is applied to the corner UVs the shader interpolates.
+    #[test]
+    fn emissive_triangles_carry_their_texture_transform_in_their_uvs() {
+        use crate::scene::{Texture, TextureRef, UvTransform};
+        use glam::Vec4Swizzles as _;
+        let mut scene = library::cornell();
+        scene.textures.push(Texture { name: "glow".into(), image: 0, sampler: Default::default(), srgb: true });
+        let transform = UvTransform { offset: Vec2::new(0.5, 0.25), rotation: 0.3, scale: Vec2::new(2.0, 0.5) };
+        let plain = lights_at_rest(&scene);
+        for m in scene.materials.iter_mut().filter(|m| luminance(m.emissive) > 0.0) {
+            m.emissive_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: Some(transform) });
+        }
+        let textured = lights_at_rest(&scene);
+        let triangles =
+            plain.lights.iter().zip(&textured.lights).filter(|(l, _)| l.position_kind.w == light_kind::TRIANGLE);
+        let mut count = 0;
+        for (before, after) in triangles {
+            let corners = |l: &GpuLight| [l.uv01.xy(), l.uv01.zw(), l.uv2_texture.xy()];
+            for (uv, got) in corners(before).into_iter().zip(corners(after)) {
+                assert!((transform.apply(uv) - got).length() < 1e-5, "{uv} → {got}");
+            }
+            assert_eq!((before.uv2_texture.z, after.uv2_texture.z), (-1.0, 0.0), "the texture index");
+            count += 1;
+        }
+        assert_eq!(count, 2);
     }
 
     #[test]

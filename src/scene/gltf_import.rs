@@ -65,8 +65,9 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
             srgb: false,
         })
         .collect();
-    scene.materials = document.materials().map(material).collect();
+    scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
+    warn_about_second_uv_sets(&mut scene);
     for mesh in document.meshes() {
         let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
         let mut primitives = Vec::new();
@@ -304,10 +305,54 @@ fn texture_ref(info: &gltf::texture::Info<'_>) -> TextureRef {
     }
 }
 
-fn material(m: gltf::Material<'_>) -> Material {
+/// A normal texture's KHR_texture_transform: the gltf crate reads the extension on textureInfo only, so it is
+/// read here from the normalTextureInfo's raw extension object.
+fn normal_texture_transform(m: &gltf::Material<'_>, root: &gltf::json::Root) -> Result<Option<UvTransform>> {
+    let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0)));
+    let raw = m
+        .index()
+        .and_then(|i| root.materials.get(i))
+        .and_then(|json| json.normal_texture.as_ref())
+        .and_then(|t| t.extensions.as_ref())
+        .and_then(|e| e.others.get("KHR_texture_transform"));
+    let Some(raw) = raw else { return Ok(None) };
+    let t: gltf::json::extensions::texture::TextureTransform = serde_json::from_value(raw.clone())
+        .map_err(|e| anyhow!("{name}: its normal texture's KHR_texture_transform is malformed: {e}"))?;
+    Ok(Some(UvTransform {
+        offset: Vec2::from_array(t.offset.0),
+        rotation: t.rotation.0,
+        scale: Vec2::from_array(t.scale.0),
+    }))
+}
+
+/// strata reads every texture on TEXCOORD_0 (README, known limits): say so where a material asks for another set.
+fn warn_about_second_uv_sets(scene: &mut Scene) {
+    let mut warnings = Vec::new();
+    for m in &scene.materials {
+        let uses = [
+            ("base colour", m.base_color_texture),
+            ("metallic-roughness", m.metallic_roughness_texture),
+            ("normal", m.normal_texture),
+            ("emissive", m.emissive_texture),
+            ("transmission", m.transmission_texture),
+        ];
+        for (what, t) in uses {
+            if let Some(t) = t.filter(|t| t.tex_coord != 0) {
+                warnings.push(format!(
+                    "material \"{}\": its {what} texture uses TEXCOORD_{}; strata reads it with TEXCOORD_0",
+                    m.name, t.tex_coord
+                ));
+            }
+        }
+    }
+    scene.warnings.extend(warnings);
+}
+
+fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let defaults = Material::default();
-    Material {
+    let normal_transform = normal_texture_transform(&m, root)?;
+    Ok(Material {
         name: m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0))),
         base_color: Vec4::from_array(pbr.base_color_factor()),
         base_color_texture: pbr.base_color_texture().as_ref().map(texture_ref),
@@ -317,7 +362,7 @@ fn material(m: gltf::Material<'_>) -> Material {
         normal_texture: m.normal_texture().map(|n| TextureRef {
             texture: n.texture().index(),
             tex_coord: n.tex_coord(),
-            transform: None,
+            transform: normal_transform,
         }),
         normal_scale: m.normal_texture().map(|n| n.scale()).unwrap_or(1.0),
         occlusion_texture: m.occlusion_texture().map(|o| TextureRef {
@@ -340,7 +385,7 @@ fn material(m: gltf::Material<'_>) -> Material {
         // Only the factor: the specular texture and colour are not read.
         specular: m.specular().map(|s| s.specular_factor()).unwrap_or(defaults.specular),
         bump: None,
-    }
+    })
 }
 
 /// Base colour and emissive textures hold sRGB-encoded colour; the rest hold linear data (glTF 2.0 §3.9).
