@@ -341,9 +341,10 @@ fn primary_rays_are_traced_per_pixel_when_asked_and_a_wrong_mode_is_named() {
     assert!(!png.exists(), "a refused render writes nothing");
 }
 
-#[test]
-fn ctrl_c_stops_the_render_and_writes_nothing() {
-    let dir = temp_dir("interrupt");
+/// Starts a long showcase render into a fresh directory, lets it load, upload and start sampling, then sends it
+/// `signal` (a `kill` option); returns how it ended and the directory, which should stay empty.
+fn signal_a_long_render(tag: &str, signal: &str) -> (Output, PathBuf) {
+    let dir = temp_dir(tag);
     let png = dir.join("never.png");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
     let child = Command::new(env!("CARGO_BIN_EXE_strata"))
@@ -351,11 +352,16 @@ fn ctrl_c_stops_the_render_and_writes_nothing() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("run strata");
-    // Let it load, upload and start sampling, then send SIGINT as a terminal's Ctrl-C would.
     std::thread::sleep(std::time::Duration::from_secs(3));
-    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill");
+    let kill = Command::new("kill").args([signal, &child.id().to_string()]).status().expect("kill");
     assert!(kill.success());
-    let out = child.wait_with_output().expect("wait");
+    (child.wait_with_output().expect("wait"), dir)
+}
+
+#[test]
+fn ctrl_c_stops_the_render_and_writes_nothing() {
+    // SIGINT, as a terminal's Ctrl-C sends it.
+    let (out, dir) = signal_a_long_render("interrupt", "-INT");
     assert_eq!(out.status.code(), Some(130), "stderr: {}", stderr(&out));
     assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
@@ -366,18 +372,7 @@ fn ctrl_c_stops_the_render_and_writes_nothing() {
 #[test]
 fn a_fatal_signal_is_named_on_stderr_and_still_ends_the_process() {
     use std::os::unix::process::ExitStatusExt as _;
-    let dir = temp_dir("crash");
-    let png = dir.join("never.png");
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
-    let child = Command::new(env!("CARGO_BIN_EXE_strata"))
-        .args(["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "320x180", "--spp", "4096"])
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("run strata");
-    std::thread::sleep(std::time::Duration::from_secs(3));
-    let kill = Command::new("kill").args(["-SEGV", &child.id().to_string()]).status().expect("kill");
-    assert!(kill.success());
-    let out = child.wait_with_output().expect("wait");
+    let (out, dir) = signal_a_long_render("crash", "-SEGV");
     assert_eq!(out.status.signal(), Some(11), "{}", outcome(&out));
     assert!(stderr(&out).contains("strata: crashed with SIGSEGV"), "{}", outcome(&out));
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());

@@ -15,13 +15,19 @@ fn light_down(position: Vec3) -> Mat4 {
     look_at(position, position - Vec3::Y, Vec3::NEG_Z)
 }
 
-/// Ground (y = 0) under an occluder covering x < 0 at height 2 (unless `occluded` is false), seen from below
-/// the occluder.
-fn shadow_scene(light: LightShape, emission: f32, occluded: bool) -> Scene {
+/// A scene of one 20 m × 20 m grey (albedo 0.8) Lambertian ground plane at y = 0, facing up.
+fn ground_scene() -> Scene {
     let mut scene = Scene::default();
     let ground = lambertian(&mut scene, 0.8);
     let (p, m) = plane_at(Vec2::new(20.0, 20.0), Vec3::ZERO, false, ground);
     place(&mut scene, "ground", p, m);
+    scene
+}
+
+/// Ground (y = 0) under an occluder covering x < 0 at height 2 (unless `occluded` is false), seen from below
+/// the occluder.
+fn shadow_scene(light: LightShape, emission: f32, occluded: bool) -> Scene {
+    let mut scene = ground_scene();
     let occluder = lambertian(&mut scene, 0.5);
     if occluded {
         let slab = strata::scene::shapes::cuboid(Vec3::new(5.0, 0.01, 5.0), Some(occluder));
@@ -325,10 +331,7 @@ fn a_point_lights_range_windows_its_light_as_khr_lights_punctual_recommends() {
     let (width, height, half_height) = (256u32, 32u32, 0.125f32); // 2 m x 0.25 m of ground
     let (light_height, range) = (1.0f32, 1.3f32);
     let lit = |radius: f32, range: f32| {
-        let mut scene = Scene::default();
-        let ground = lambertian(&mut scene, 0.8);
-        let (p, m) = plane_at(Vec2::new(20.0, 20.0), Vec3::ZERO, false, ground);
-        place(&mut scene, "ground", p, m);
+        let mut scene = ground_scene();
         scene.lights.push(Light {
             name: "point".into(),
             shape: LightShape::Point { radius },
@@ -456,10 +459,7 @@ fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
     let texel = [200u8, 150, 100, 255];
     let colour = Vec3::from_array([0, 1, 2].map(|i| f32::from(texel[i]) / 255.0));
     let lit_by = |textured: bool| {
-        let mut scene = Scene::default();
-        let ground = lambertian(&mut scene, 0.8);
-        let (p, m) = plane_at(Vec2::new(20.0, 20.0), Vec3::ZERO, false, ground);
-        place(&mut scene, "ground", p, m);
+        let mut scene = ground_scene();
         let lamp = emitter(&mut scene, 3.0);
         if textured {
             scene.images.push(TextureImage { name: "lamp".into(), width: 1, height: 1, rgba8: texel.to_vec() });

@@ -60,6 +60,25 @@ fn render(gpu: &common::GpuTest, pass: &GBufferPass, scene: &Scene, size: (u32, 
     pass.render_to_host(&gbuffer, &inputs, &sample).unwrap()
 }
 
+/// Calls `check` at every covered pixel of a 16×16 frame, and asserts that more than 100 are covered.
+fn each_covered_pixel(frame: &GBufferFrame, mut check: impl FnMut(u32, u32)) {
+    let mut covered = 0;
+    for y in 0..16 {
+        for x in 0..16 {
+            if frame.covered(x, y) {
+                covered += 1;
+                check(x, y);
+            }
+        }
+    }
+    assert!(covered > 100, "{covered} pixels covered");
+}
+
+/// An emissive factor times an sRGB-encoded texel, decoded exactly.
+fn emission_of(factor: Vec3, srgb_texel: [u8; 4]) -> Vec3 {
+    factor * Vec3::from_array([0, 1, 2].map(|i| strata::output::srgb_to_linear(f32::from(srgb_texel[i]) / 255.0)))
+}
+
 #[test]
 fn sine_bumps_on_a_plane_match_the_closed_form_at_every_pixel() {
     let gpu = common::GpuTest::new();
@@ -321,7 +340,6 @@ fn normal_textures_tilt_the_normal_and_the_bump_composes_on_top() {
 
 #[test]
 fn metallic_roughness_and_emissive_textures_scale_their_factors() {
-    use strata::output::srgb_to_linear;
     use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
     let gpu = common::GpuTest::new();
@@ -345,24 +363,15 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     m.emissive_texture = Some(TextureRef { texture: 1, tex_coord: 0, transform: None });
     let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
     let (metallic, roughness) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0);
-    let emission =
-        Vec3::new(2.0, 1.0, 0.5) * Vec3::from_array([0, 1, 2].map(|i| srgb_to_linear(f32::from(emissive[i]) / 255.0)));
-    let mut covered = 0;
-    for y in 0..16 {
-        for x in 0..16 {
-            if !frame.covered(x, y) {
-                continue;
-            }
-            covered += 1;
-            // The material attachment holds 8-bit unorm: within half a step.
-            let mat = frame.at(MATERIAL, x, y);
-            let step = 0.5 / 255.0 + 1e-4;
-            assert!((mat[0] - metallic).abs() < step && (mat[1] - roughness).abs() < step, "({x}, {y}): {mat:?}");
-            let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
-            assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
-        }
-    }
-    assert!(covered > 100, "{covered} pixels covered");
+    let emission = emission_of(Vec3::new(2.0, 1.0, 0.5), emissive);
+    each_covered_pixel(&frame, |x, y| {
+        // The material attachment holds 8-bit unorm: within half a step.
+        let mat = frame.at(MATERIAL, x, y);
+        let step = 0.5 / 255.0 + 1e-4;
+        assert!((mat[0] - metallic).abs() < step && (mat[1] - roughness).abs() < step, "({x}, {y}): {mat:?}");
+        let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+        assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+    });
     drop(pass);
     gpu.finish().unwrap();
 }
@@ -374,7 +383,6 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
 /// tangent frame turns with it.
 #[test]
 fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_their_factor() {
-    use strata::output::srgb_to_linear;
     use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = common::GpuTest::new();
@@ -413,36 +421,24 @@ fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_the
     assert!(dpdu.cross(dpdv).length() > 0.1, "the plane needs a tangent frame: {dpdu} {dpdv}");
     let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
     let (metallic, roughness, transmission) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0, 0.6 * 128.0 / 255.0);
-    let emission =
-        Vec3::new(2.0, 1.0, 0.5) * Vec3::from_array([0, 1, 2].map(|i| srgb_to_linear(f32::from(emissive[i]) / 255.0)));
+    let emission = emission_of(Vec3::new(2.0, 1.0, 0.5), emissive);
     // A quarter turn (KHR_texture_transform's rotation) makes ∂p/∂u' = ∂p/∂v: the texel's +x tilt follows ∂p/∂v.
     let n = Vec3::Y;
     let expected_normal = (dpdv - n * n.dot(dpdv)).normalize();
-    let mut covered = 0;
-    for y in 0..16 {
-        for x in 0..16 {
-            if !frame.covered(x, y) {
-                continue;
-            }
-            covered += 1;
-            let mat = frame.at(MATERIAL, x, y);
-            let step = 0.5 / 255.0 + 1e-4;
-            assert!(
-                (mat[0] - metallic).abs() < step
-                    && (mat[1] - roughness).abs() < step
-                    && (mat[2] - transmission).abs() < step,
-                "({x}, {y}): material {mat:?}"
-            );
-            let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
-            assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
-            let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
-            assert!(
-                (normal - expected_normal).length() < 0.02,
-                "({x}, {y}): normal {normal}, expected {expected_normal}"
-            );
-        }
-    }
-    assert!(covered > 100, "{covered} pixels covered");
+    each_covered_pixel(&frame, |x, y| {
+        let mat = frame.at(MATERIAL, x, y);
+        let step = 0.5 / 255.0 + 1e-4;
+        assert!(
+            (mat[0] - metallic).abs() < step
+                && (mat[1] - roughness).abs() < step
+                && (mat[2] - transmission).abs() < step,
+            "({x}, {y}): material {mat:?}"
+        );
+        let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+        assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+        let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
+        assert!((normal - expected_normal).length() < 0.02, "({x}, {y}): normal {normal}, expected {expected_normal}");
+    });
     drop(pass);
     gpu.finish().unwrap();
 }

@@ -215,37 +215,18 @@ fn raster_and_traced_primary_visibility_agree_on_the_showcase() {
 /// roughness 1 and metalness 0 on every showcase material must render exactly as the factors with metalness 0.
 #[test]
 fn metallic_roughness_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
+    use strata::scene::Sampler;
     let gpu = GpuTest::new();
     let original = load(&repo("scenes/showcase.toml"));
     assert!(original.materials.iter().any(|m| m.metallic > 0.0), "the showcase needs a metal for this test");
     let mut textured = original.clone();
-    textured.images.push(TextureImage {
-        name: "metal 0, rough 1".into(),
-        width: 1,
-        height: 1,
-        rgba8: vec![0, 255, 0, 255],
-    });
-    textured.textures.push(Texture {
-        name: "metal 0, rough 1".into(),
-        image: textured.images.len() - 1,
-        sampler: Sampler::default(),
-        srgb: false,
-    });
-    let texture = TextureRef { texture: textured.textures.len() - 1, tex_coord: 0, transform: None };
+    let texture = with_texture(&mut textured, "metal 0, rough 1", &[[0, 255, 0, 255]], Sampler::default(), None);
     let mut factors = original.clone();
     for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
         t.metallic_roughness_texture = Some(texture);
         f.metallic = 0.0;
     }
-    for primary in [Primary::Raster, Primary::Rays] {
-        let s = RenderSettings { primary, ..settings(64, 36, 2, SamplerKind::Jittered) };
-        let with_texture = render(gpu.device(), &textured, &s).linear;
-        let with_factors = render(gpu.device(), &factors, &s).linear;
-        let untouched = render(gpu.device(), &original, &s).linear;
-        assert!(with_texture == with_factors, "{primary:?}: the texture does not act as metalness 0, roughness 1");
-        assert!(with_factors != untouched, "{primary:?}: metalness does not show in this picture");
-    }
+    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, "metalness 0, roughness 1");
     gpu.finish().unwrap();
 }
 
@@ -255,41 +236,51 @@ fn metallic_roughness_textures_shade_like_their_factors_in_both_modes_and_at_ray
 /// one, must render the showcase exactly as transmission factor 0 does, in both modes.
 #[test]
 fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+    use strata::scene::{Sampler, UvTransform, Wrap};
     let gpu = GpuTest::new();
     let original = load(&repo("scenes/showcase.toml"));
     assert!(original.materials.iter().any(|m| m.transmission > 0.0), "the showcase needs glass for this test");
     let mut textured = original.clone();
-    textured.images.push(TextureImage {
-        name: "transmits | does not".into(),
-        width: 2,
-        height: 1,
-        rgba8: vec![255, 255, 255, 255, 0, 255, 255, 255],
-    });
     let nearest =
         Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
-    textured.textures.push(Texture {
-        name: "transmission halves".into(),
-        image: textured.images.len() - 1,
-        sampler: nearest,
-        srgb: false,
-    });
     let right_half = UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) };
-    let texture = TextureRef { texture: textured.textures.len() - 1, tex_coord: 0, transform: Some(right_half) };
+    let halves = [[255, 255, 255, 255], [0, 255, 255, 255]];
+    let texture = with_texture(&mut textured, "transmits | does not", &halves, nearest, Some(right_half));
     let mut factors = original.clone();
     for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
         t.transmission_texture = Some(texture);
         f.transmission = 0.0;
     }
+    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, "transmission 0");
+    gpu.finish().unwrap();
+}
+
+/// Adds a linear (non-colour) texture of one row of `texels` to the scene; returns a use of it.
+fn with_texture(
+    scene: &mut Scene,
+    name: &str,
+    texels: &[[u8; 4]],
+    sampler: strata::scene::Sampler,
+    transform: Option<strata::scene::UvTransform>,
+) -> strata::scene::TextureRef {
+    use strata::scene::{Texture, TextureImage, TextureRef};
+    let rgba8 = texels.concat();
+    scene.images.push(TextureImage { name: name.into(), width: texels.len() as u32, height: 1, rgba8 });
+    scene.textures.push(Texture { name: name.into(), image: scene.images.len() - 1, sampler, srgb: false });
+    TextureRef { texture: scene.textures.len() - 1, tex_coord: 0, transform }
+}
+
+/// In both primary modes, `textured` renders bit-identical to `factors` (what the texture should act as), and
+/// `factors` visibly differs from `original`, so the comparison means something.
+fn assert_renders_alike_in_both_modes(gpu: &GpuTest, textured: &Scene, factors: &Scene, original: &Scene, what: &str) {
     for primary in [Primary::Raster, Primary::Rays] {
         let s = RenderSettings { primary, ..settings(64, 36, 2, SamplerKind::Jittered) };
-        let with_texture = render(gpu.device(), &textured, &s).linear;
-        let with_factors = render(gpu.device(), &factors, &s).linear;
-        let untouched = render(gpu.device(), &original, &s).linear;
-        assert!(with_texture == with_factors, "{primary:?}: the texture does not act as transmission 0");
-        assert!(with_factors != untouched, "{primary:?}: transmission does not show in this picture");
+        let with_texture = render(gpu.device(), textured, &s).linear;
+        let with_factors = render(gpu.device(), factors, &s).linear;
+        let untouched = render(gpu.device(), original, &s).linear;
+        assert!(with_texture == with_factors, "{primary:?}: the texture does not act as {what}");
+        assert!(with_factors != untouched, "{primary:?}: {what} does not show in this picture");
     }
-    gpu.finish().unwrap();
 }
 
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
