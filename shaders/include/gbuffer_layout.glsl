@@ -59,12 +59,11 @@ vec2 transform_uv(vec4 rows[2], vec2 uv) {
 // The surface derivatives with respect to a texture's transformed coordinates uv' = A·uv + t: [∂p/∂u' ∂p/∂v'] =
 // [∂p/∂u ∂p/∂v]·A⁻¹, so a rotated or scaled normal texture keeps its tangent frame on the surface.
 void transform_derivatives(vec4 rows[2], inout vec3 dpdu, inout vec3 dpdv) {
-    mat2 a = mat2(rows[0].x, rows[1].x, rows[0].y, rows[1].y);  // columns
-    float det = determinant(a);
+    // A = [a b; c d] (rows[0] = (a, b, tx), rows[1] = (c, d, ty)); A⁻¹ = [d −b; −c a] / det.
+    float det = rows[0].x * rows[1].y - rows[0].y * rows[1].x;
     if (!(abs(det) > 0.0)) return;
-    mat2 inv = inverse(a);
-    vec3 u = dpdu * inv[0].x + dpdv * inv[0].y;
-    vec3 v = dpdu * inv[1].x + dpdv * inv[1].y;
+    vec3 u = (dpdu * rows[1].y - dpdv * rows[1].x) / det;
+    vec3 v = (dpdv * rows[0].x - dpdu * rows[0].y) / det;
     dpdu = u;
     dpdv = v;
 }

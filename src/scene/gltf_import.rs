@@ -297,18 +297,17 @@ fn texture_ref(info: &gltf::texture::Info<'_>) -> TextureRef {
     TextureRef {
         texture: info.texture().index(),
         tex_coord: transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord()),
-        transform: transform.map(|t| UvTransform {
-            offset: Vec2::from_array(t.offset()),
-            rotation: t.rotation(),
-            scale: Vec2::from_array(t.scale()),
-        }),
+        transform: transform.map(|t| uv_transform(t.offset(), t.rotation(), t.scale())),
     }
 }
 
 /// A normal texture's KHR_texture_transform: the gltf crate reads the extension on textureInfo only, so it is
 /// read here from the normalTextureInfo's raw extension object.
-fn normal_texture_transform(m: &gltf::Material<'_>, root: &gltf::json::Root) -> Result<Option<UvTransform>> {
-    let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0)));
+fn normal_texture_transform(
+    m: &gltf::Material<'_>,
+    name: &str,
+    root: &gltf::json::Root,
+) -> Result<Option<UvTransform>> {
     let raw = m
         .index()
         .and_then(|i| root.materials.get(i))
@@ -318,11 +317,11 @@ fn normal_texture_transform(m: &gltf::Material<'_>, root: &gltf::json::Root) -> 
     let Some(raw) = raw else { return Ok(None) };
     let t: gltf::json::extensions::texture::TextureTransform = serde_json::from_value(raw.clone())
         .map_err(|e| anyhow!("{name}: its normal texture's KHR_texture_transform is malformed: {e}"))?;
-    Ok(Some(UvTransform {
-        offset: Vec2::from_array(t.offset.0),
-        rotation: t.rotation.0,
-        scale: Vec2::from_array(t.scale.0),
-    }))
+    Ok(Some(uv_transform(t.offset.0, t.rotation.0, t.scale.0)))
+}
+
+fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform {
+    UvTransform { offset: Vec2::from_array(offset), rotation, scale: Vec2::from_array(scale) }
 }
 
 /// strata reads every texture on TEXCOORD_0 (README, known limits): say so where a material asks for another set.
@@ -351,9 +350,10 @@ fn warn_about_second_uv_sets(scene: &mut Scene) {
 fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let defaults = Material::default();
-    let normal_transform = normal_texture_transform(&m, root)?;
+    let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0)));
+    let normal_transform = normal_texture_transform(&m, &name, root)?;
     Ok(Material {
-        name: m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0))),
+        name,
         base_color: Vec4::from_array(pbr.base_color_factor()),
         base_color_texture: pbr.base_color_texture().as_ref().map(texture_ref),
         metallic: pbr.metallic_factor(),
