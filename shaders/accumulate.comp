@@ -75,18 +75,22 @@ vec4 hit_color(TriangleHit h) {
     return h.w.x * colors.v[h.i0] + h.w.y * colors.v[h.i1] + h.w.z * colors.v[h.i2];
 }
 
-// Whether a candidate triangle of alpha-tested geometry covers its point: the rule of gbuffer.frag's discard
-// (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
+// Whether an alpha-tested material covers a point with this vertex colour alpha and UV: the rule of
+// gbuffer.frag's discard (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
+bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv) {
+    float alpha = m.base_color.a * vertex_alpha;
+    if (m.base_color_texture >= 0) {
+        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0).a;
+    }
+    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+}
+
+// Whether a candidate triangle of alpha-tested geometry covers its point.
 bool alpha_covers(rayQueryEXT q) {
     TriangleHit h = triangle_hit(
         rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false),
         uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)), rayQueryGetIntersectionBarycentricsEXT(q, false));
-    GpuMaterial m = materials[h.r.material];
-    float alpha = m.base_color.a * hit_color(h).a;
-    if (m.base_color_texture >= 0) {
-        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, hit_uv(h)), 0.0).a;
-    }
-    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+    return material_covers(materials[h.r.material], hit_color(h).a, hit_uv(h));
 }
 
 // The flags every ray query starts with, besides its own.
@@ -187,10 +191,18 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
     float p = l.cone.w;
     if (!(p > 0.0)) return vec3(0.0);
     LightSample ls = sample_light(l, s.position, sample2(pixel, dim + 1u));
-    if (l.position_kind.w == LIGHT_TRIANGLE && l.uv2_texture.z >= 0.0) {
-        // An emissive texture scales the radiance where the sample landed (hit_surface reads it the same way).
-        vec2 uv = (1.0 - ls.bary.x - ls.bary.y) * l.uv01.xy + ls.bary.x * l.uv01.zw + ls.bary.y * l.uv2_texture.xy;
-        ls.value *= textureLod(textures[nonuniformEXT(int(l.uv2_texture.z))], uv, 0.0).rgb;
+    if (l.position_kind.w == LIGHT_TRIANGLE && l.uv2_material.z >= 0.0) {
+        // The emitter's material where the sample landed, as a ray hit there would see it (hit_surface): its
+        // emissive texture scales the radiance, and where alpha-masking cuts the surface out nothing emits.
+        GpuMaterial m = materials[int(l.uv2_material.z)];
+        vec3 w = vec3(1.0 - ls.bary.x - ls.bary.y, ls.bary);
+        vec2 uv = w.x * l.uv01.xy + w.y * l.uv01.zw + w.z * l.uv2_material.xy;
+        if (ALPHA_TESTED != 0u && m.alpha_mode != 0 && !material_covers(m, dot(w, l.corner_alpha.xyz), uv)) {
+            return vec3(0.0);
+        }
+        if (m.emissive_texture >= 0) {
+            ls.value *= textureLod(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, uv), 0.0).rgb;
+        }
     }
     if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
     vec3 diffuse;

@@ -369,10 +369,10 @@ fn a_point_lights_range_windows_its_light_as_khr_lights_punctual_recommends() {
     gpu.finish().unwrap();
 }
 
-/// A ground-facing leaf card: a plane at height 2 over x in [-10, 10] whose base-colour texture is opaque over
-/// its left half (x < 0) and clear over its right half, alpha-masked (glTF MASK, cutoff 0.5).
-fn add_leaf_card(scene: &mut Scene) {
-    use strata::scene::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, Wrap};
+/// A 2×1 texture, nearest-sampled and clamped, whose left texel (u < 0.5) is opaque grey and right texel clear
+/// (alpha 0); returns its texture index.
+fn half_clear_texture(scene: &mut Scene) -> usize {
+    use strata::scene::{Sampler, Texture, TextureImage, Wrap};
     scene.images.push(TextureImage {
         name: "half clear".into(),
         width: 2,
@@ -392,9 +392,17 @@ fn add_leaf_card(scene: &mut Scene) {
         sampler: nearest,
         srgb: true,
     });
+    scene.textures.len() - 1
+}
+
+/// A ground-facing leaf card: a plane at height 2 over x in [-10, 10] whose base-colour texture is opaque over
+/// its left half (x < 0) and clear over its right half, alpha-masked (glTF MASK, cutoff 0.5).
+fn add_leaf_card(scene: &mut Scene) {
+    use strata::scene::{AlphaMode, Material, TextureRef};
+    let texture = half_clear_texture(scene);
     scene.materials.push(Material {
         name: "leaf card".into(),
-        base_color_texture: Some(TextureRef { texture: scene.textures.len() - 1, tex_coord: 0, transform: None }),
+        base_color_texture: Some(TextureRef { texture, tex_coord: 0, transform: None }),
         metallic: 0.0,
         specular: 0.0,
         alpha_mode: AlphaMode::Mask { cutoff: 0.5 },
@@ -449,10 +457,11 @@ fn alpha_masked_surfaces_are_cut_out_for_shadow_and_primary_rays() {
 
 /// An emissive texture makes its surface a light like any other: a textured quad emitter lights the ground
 /// exactly as an untextured one whose factor is the texture's colour times the factor. (Light sampling picks
-/// the triangles by the factor's power and the shader scales each sample by the texel it landed on.)
+/// the triangles by the factor's power and the shader scales each sample by the texel it landed on, through the
+/// texture's KHR_texture_transform: here one that keeps every lookup on the lit texel of a lit/black pair.)
 #[test]
 fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
-    use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = GpuTest::new();
     // Stored linear here, so the comparison is about the lighting, not lavapipe's sRGB decoding (which glTF's
     // emissive textures go through and which differed from an exact decode by 0.17% in this test).
@@ -462,9 +471,19 @@ fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
         let mut scene = ground_scene();
         let lamp = emitter(&mut scene, 3.0);
         if textured {
-            scene.images.push(TextureImage { name: "lamp".into(), width: 1, height: 1, rgba8: texel.to_vec() });
-            scene.textures.push(Texture { name: "lamp".into(), image: 0, sampler: Sampler::default(), srgb: false });
-            scene.materials[lamp].emissive_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
+            let rgba8 = [texel, [0, 0, 0, 255]].concat();
+            scene.images.push(TextureImage { name: "lamp".into(), width: 2, height: 1, rgba8 });
+            let sampler = Sampler {
+                mag_linear: false,
+                min_linear: false,
+                mipmaps: false,
+                wrap_s: Wrap::ClampToEdge,
+                wrap_t: Wrap::ClampToEdge,
+            };
+            scene.textures.push(Texture { name: "lamp".into(), image: 0, sampler, srgb: false });
+            // u' = 0.4 u stays on the left texel; untransformed, half the lamp would be black.
+            let transform = Some(UvTransform { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::new(0.4, 1.0) });
+            scene.materials[lamp].emissive_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform });
         } else {
             scene.materials[lamp].emissive *= colour;
         }
@@ -485,6 +504,57 @@ fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
                 b[c]
             );
         }
+    }
+    gpu.finish().unwrap();
+}
+
+/// Alpha-masking cuts an emitter out as it cuts any surface: a lamp whose base-colour texture is clear over its
+/// right half lights the ground as a lamp of its left half alone does. Light samples are spread over the whole
+/// triangle pair (chosen by power), so those that land on the clear half must bring nothing — rays pass there —
+/// or the masked lamp would shine about twice as bright.
+#[test]
+fn alpha_masked_emitters_light_the_ground_only_from_what_they_cover() {
+    use strata::scene::{AlphaMode, TextureRef};
+    let gpu = GpuTest::new();
+    let (size, half_height) = (48u32, 1.5);
+    let lit_by = |masked: bool| {
+        let mut scene = ground_scene();
+        let lamp = emitter(&mut scene, 3.0);
+        let (p, m) = if masked {
+            let texture = half_clear_texture(&mut scene);
+            let material = &mut scene.materials[lamp];
+            material.base_color_texture = Some(TextureRef { texture, tex_coord: 0, transform: None });
+            material.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+            plane_at(Vec2::new(1.0, 0.5), Vec3::new(0.0, 2.0, 0.0), true, lamp)
+        } else {
+            plane_at(Vec2::new(0.5, 0.5), Vec3::new(-0.25, 2.0, 0.0), true, lamp)
+        };
+        place(&mut scene, "lamp", p, m);
+        scene.camera = Some(ortho_down(Vec3::ZERO, 1.0, half_height));
+        render(gpu.device(), &scene, &settings(size, size, 64, SamplerKind::Jittered)).linear
+    };
+    let (masked, half) = (lit_by(true), lit_by(false));
+    // Means over 8×8-pixel blocks: 4,096 light samples each.
+    let blocks = |f: &strata::output::Frame| -> Vec<f32> {
+        let n = size / 8;
+        (0..n * n)
+            .map(|b| {
+                let (bx, by) = (b % n * 8, b / n * 8);
+                (0..64).map(|i| f.pixel(bx + i % 8, by + i / 8)[0]).sum::<f32>() / 64.0
+            })
+            .collect()
+    };
+    let (masked, half) = (blocks(&masked), blocks(&half));
+    let (total_masked, total_half) = (masked.iter().sum::<f32>(), half.iter().sum::<f32>());
+    assert!(total_half > 0.0, "the half lamp lights the ground");
+    assert!(
+        (total_masked / total_half - 1.0).abs() < 0.02,
+        "the masked lamp brings {total_masked}, the half lamp {total_half} (ratio {})",
+        total_masked / total_half
+    );
+    let brightest = half.iter().copied().fold(0.0f32, f32::max);
+    for (i, (a, b)) in masked.iter().zip(&half).enumerate().filter(|(_, (_, b))| **b > 0.1 * brightest) {
+        assert!((a / b - 1.0).abs() < 0.05, "block {i}: masked lamp {a}, half lamp {b}");
     }
     gpu.finish().unwrap();
 }

@@ -17,8 +17,9 @@ struct GpuLight {
     vec4 normal;         // xyz direction of travel, w two-sided
     vec4 emission;       // rgb, w selection CDF (inclusive)
     vec4 cone;           // x cos outer, y cos inner, z range of points and spots (0: infinite), w selection probability
-    vec4 uv01;           // emissive triangles: UVs of p0 (xy) and p1 (zw)
-    vec4 uv2_texture;    // emissive triangles: UV of p2 (xy), z emissive texture (-1: none)
+    vec4 uv01;           // emissive triangles: TEXCOORD_0 of p0 (xy) and p1 (zw), untransformed
+    vec4 uv2_material;   // emissive triangles: TEXCOORD_0 of p2 (xy), z material (-1: not geometry)
+    vec4 corner_alpha;   // emissive triangles: COLOR_0 alpha at p0, p1, p2 (xyz)
 };
 
 struct GpuPrimitiveRecord {

@@ -33,10 +33,15 @@ pub struct GpuLight {
     /// x: cos(outer cone), y: cos(inner cone) for spots; z: range of points and spots (0: infinite); w: the
     /// probability of selecting it.
     pub cone: Vec4,
-    /// Emissive triangles: the UVs of p0 (xy) and p1 (zw).
+    /// Emissive triangles: the UVs (TEXCOORD_0 as stored; each texture's transform is applied in the shader)
+    /// of p0 (xy) and p1 (zw).
     pub uv01: Vec4,
-    /// Emissive triangles: the UV of p2 (xy); z: the emissive texture scaling the radiance, -1 for none.
-    pub uv2_texture: Vec4,
+    /// Emissive triangles: the UV of p2 (xy); z: the material's index, -1 for lights that are not geometry (the
+    /// shader reads the emissive texture and the alpha coverage at the sampled point from it); w: unused.
+    pub uv2_material: Vec4,
+    /// Emissive triangles: COLOR_0's alpha at p0, p1 and p2 (xyz; 1 without vertex colours), which alpha-masked
+    /// materials multiply in; w: unused.
+    pub corner_alpha: Vec4,
 }
 
 /// What the shader needs to shade a ray's hit on a primitive: its vertex streams by device address
@@ -128,8 +133,9 @@ mod tests {
 
     #[test]
     fn layouts_match_the_glsl_structs() {
-        assert_eq!(size_of::<GpuLight>(), 128);
-        assert_eq!(offset_of!(GpuLight, uv2_texture), 112);
+        assert_eq!(size_of::<GpuLight>(), 144);
+        assert_eq!(offset_of!(GpuLight, uv2_material), 112);
+        assert_eq!(offset_of!(GpuLight, corner_alpha), 128);
         assert_eq!(offset_of!(GpuLight, emission), 64);
         assert_eq!(size_of::<GpuPrimitiveRecord>(), 64);
         assert_eq!(offset_of!(GpuPrimitiveRecord, dpdv), 48);

@@ -57,7 +57,8 @@ impl LightSet {
                 // KHR_lights_punctual: range is not scaled by the node's transform.
                 cone: Vec4::new(0.0, 0.0, light.range.max(0.0), 0.0),
                 uv01: Vec4::ZERO,
-                uv2_texture: Vec4::new(0.0, 0.0, -1.0, 0.0),
+                uv2_material: Vec4::new(0.0, 0.0, -1.0, 0.0),
+                corner_alpha: Vec4::ONE,
             };
             let power = match light.shape {
                 LightShape::Point { radius } => {
@@ -107,17 +108,17 @@ impl LightSet {
         'instances: for (instance, world) in scene.instances.iter().zip(transforms) {
             let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
             for primitive in &scene.meshes[instance.mesh].primitives {
-                let Some(material) = primitive.material.and_then(|m| scene.materials.get(m)) else { continue };
-                // Chosen by the factor's power; an emissive texture scales the radiance at the sampled point
-                // (the shader evaluates it there), which keeps the estimate unbiased.
+                let Some((material_index, material)) =
+                    primitive.material.and_then(|m| Some((m, scene.materials.get(m)?)))
+                else {
+                    continue;
+                };
+                // Chosen by the factor's power over the whole triangle; the shader scales each sample by the
+                // emissive texture at the point it landed on, and drops it where alpha-masking cuts the surface
+                // out (rays pass there), which keeps the estimate unbiased.
                 if luminance(material.emissive) <= 0.0 {
                     continue;
                 }
-                let emissive_texture = material.emissive_texture.filter(|t| t.texture < scene.textures.len());
-                let texture = emissive_texture.map_or(-1.0, |t| t.texture as f32);
-                // The texture's KHR_texture_transform goes into the stored UVs: it is affine, so transforming the
-                // corners and then interpolating equals interpolating and then transforming.
-                let uv_transform = emissive_texture.and_then(|t| t.transform).map(|t| t.matrix());
                 for tri in primitive.indices.chunks_exact(3) {
                     if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
                         skipped_triangles += primitive.indices.len() / 3;
@@ -128,10 +129,8 @@ impl LightSet {
                         continue;
                     };
                     let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
-                    let uv = [0, 1, 2].map(|k| {
-                        let uv = primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO);
-                        uv_transform.map_or(uv, |m| m.transform_point2(uv))
-                    });
+                    let uv = [0, 1, 2].map(|k| primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
+                    let alpha = [0, 1, 2].map(|k| primitive.colors.get(tri[k] as usize).map_or(1.0, |c| c.w));
                     let (e1, e2) = (p1 - p0, p2 - p0);
                     let cross = e1.cross(e2);
                     let area = 0.5 * cross.length();
@@ -155,7 +154,8 @@ impl LightSet {
                         emission: material.emissive.extend(0.0),
                         cone: Vec4::ZERO,
                         uv01: uv[0].extend(uv[1].x).extend(uv[1].y),
-                        uv2_texture: uv[2].extend(texture).extend(0.0),
+                        uv2_material: uv[2].extend(material_index as f32).extend(0.0),
+                        corner_alpha: Vec3::from_array(alpha).extend(1.0),
                     });
                     powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
                 }
@@ -203,31 +203,46 @@ mod tests {
         assert_eq!(set.lights.last().map(|l| l.emission.w), Some(1.0));
     }
 
-    /// An emissive texture's KHR_texture_transform is applied to the corner UVs the shader interpolates.
+    /// What the shader needs to evaluate the emitter's material at a sampled point: the corner UVs as stored
+    /// (each texture applies its own KHR_texture_transform there), the material, COLOR_0's alpha at the corners.
     #[test]
-    fn emissive_triangles_carry_their_texture_transform_in_their_uvs() {
-        use crate::scene::{Texture, TextureRef, UvTransform};
+    fn emissive_triangles_carry_their_uvs_material_and_vertex_alpha() {
         use glam::Vec4Swizzles as _;
         let mut scene = library::cornell();
-        scene.textures.push(Texture { name: "glow".into(), image: 0, sampler: Default::default(), srgb: true });
-        let transform = UvTransform { offset: Vec2::new(0.5, 0.25), rotation: 0.3, scale: Vec2::new(2.0, 0.5) };
-        let plain = lights_at_rest(&scene);
-        for m in scene.materials.iter_mut().filter(|m| luminance(m.emissive) > 0.0) {
-            m.emissive_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: Some(transform) });
-        }
-        let textured = lights_at_rest(&scene);
-        let triangles =
-            plain.lights.iter().zip(&textured.lights).filter(|(l, _)| l.position_kind.w == light_kind::TRIANGLE);
-        let mut count = 0;
-        for (before, after) in triangles {
-            let corners = |l: &GpuLight| [l.uv01.xy(), l.uv01.zw(), l.uv2_texture.xy()];
-            for (uv, got) in corners(before).into_iter().zip(corners(after)) {
-                assert!((transform.apply(uv) - got).length() < 1e-5, "{uv} → {got}");
+        let lamp = scene.materials.iter().position(|m| luminance(m.emissive) > 0.0).expect("cornell has a lamp");
+        let (mesh, primitive) = scene
+            .meshes
+            .iter()
+            .enumerate()
+            .find_map(|(i, mesh)| Some((i, mesh.primitives.iter().position(|p| p.material == Some(lamp))?)))
+            .expect("a primitive wears the lamp's material");
+        let p = &mut scene.meshes[mesh].primitives[primitive];
+        p.uvs = (0..p.positions.len()).map(|i| Vec2::new(i as f32, 0.5 * i as f32)).collect();
+        p.colors = (0..p.positions.len()).map(|i| Vec4::new(1.0, 1.0, 1.0, 0.1 * i as f32)).collect();
+        let p = p.clone();
+        scene.lights.push(crate::scene::Light {
+            name: "bulb".into(),
+            shape: LightShape::Point { radius: 0.0 },
+            emission: Vec3::ONE,
+            world_from_light: Mat4::IDENTITY,
+            node: None,
+            range: 0.0,
+        });
+        let set = lights_at_rest(&scene);
+        assert_eq!(set.analytic, 1);
+        let triangles: Vec<&GpuLight> =
+            set.lights.iter().filter(|l| l.position_kind.w == light_kind::TRIANGLE).collect();
+        assert_eq!(triangles.len(), p.indices.len() / 3);
+        for (light, tri) in triangles.iter().zip(p.indices.chunks_exact(3)) {
+            let corners = [light.uv01.xy(), light.uv01.zw(), light.uv2_material.xy()];
+            for (k, &i) in tri.iter().enumerate() {
+                assert_eq!(corners[k], p.uvs[i as usize], "corner {k}'s UV");
+                assert_eq!(light.corner_alpha[k], p.colors[i as usize].w, "corner {k}'s vertex alpha");
             }
-            assert_eq!((before.uv2_texture.z, after.uv2_texture.z), (-1.0, 0.0), "the texture index");
-            count += 1;
+            assert_eq!(light.uv2_material.z, lamp as f32, "the material index");
         }
-        assert_eq!(count, 2);
+        let analytic = &set.lights[..set.analytic];
+        assert!(analytic.iter().all(|l| l.uv2_material.z == -1.0), "lights that are not geometry have no material");
     }
 
     #[test]
