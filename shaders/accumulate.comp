@@ -234,7 +234,8 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     vec4 mat = texelFetch(gbuffer[4], p, 0);
     s.position = pos.xyz;
     s.normal = normalize(texelFetch(gbuffer[1], p, 0).xyz);
-    s.geometric = normalize(texelFetch(gbuffer[2], p, 0).xyz);
+    vec4 geometric = texelFetch(gbuffer[2], p, 0);
+    s.geometric = normalize(geometric.xyz);
     s.emission = texelFetch(gbuffer[5], p, 0).rgb;
     s.emitter_density = 0.0;
     s.m.albedo = texelFetch(gbuffer[3], p, 0).rgb;
@@ -242,7 +243,8 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     s.m.roughness = mat.y;
     s.m.transmission = mat.z;
     s.m.ior = 1.0 + 3.0 * mat.w;
-    s.m.specular = materials[material].emissive.w;
+    s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
+    s.m.specular_color = materials[material].specular_color.rgb;
     face_viewer(s, v);
     return s;
 }
@@ -324,6 +326,10 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     }
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
+    if (m.specular_texture >= 0) {
+        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], transform_uv(m.specular_uv_rows, uv), 0.0).a;
+    }
+    s.m.specular_color = m.specular_color.rgb;
     face_viewer(s, v);
     // Matches render/lights.rs: emissive surfaces are lights chosen by their factor's power (a texture scales
     // what a sample brings, not how often it is chosen), one-sided ones only from the front.

@@ -65,7 +65,12 @@ void main() {
 
     out_position = vec4(in_world_position, -dot(pc.view_z_row, vec4(in_world_position, 1.0)));
     out_shading_normal = vec4(shading, height);
-    out_geometric_normal = vec4(geometric, 0.0);
+    // The specular factor rides in the geometric normal's spare channel (16-bit float).
+    float specular = m.emissive.w;
+    if (m.specular_texture >= 0) {
+        specular *= texture(textures[nonuniformEXT(m.specular_texture)], transform_uv(m.specular_uv_rows, in_uv)).a;
+    }
+    out_geometric_normal = vec4(geometric, specular);
     out_albedo = base;
     // Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); ray hits do the same (accumulate.comp).
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);  // metalness in B, roughness in G

@@ -376,20 +376,21 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     gpu.finish().unwrap();
 }
 
-/// KHR_texture_transform applies to every texture the pass reads, and the transmission texture's R channel
-/// scales its factor. Each texture holds two texels, left and right; the transforms (offset 0.55, scale 0.4 in
+/// KHR_texture_transform applies to every texture the pass reads, the transmission texture's R channel scales
+/// its factor and the specular texture's alpha its factor (into the geometric normal's spare channel). Each texture holds two texels, left and right; the transforms (offset 0.55, scale 0.4 in
 /// u) send the whole plane to the right one, so an untransformed lookup shows as the left texel on half of it. A
 /// normal texture turned a quarter turn tilts the normal along the surface's ∂p/∂v instead of ∂p/∂u: its
 /// tangent frame turns with it.
 #[test]
-fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_their_factor() {
-    use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
+fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textures_scale_their_factors() {
+    use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL};
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = common::GpuTest::new();
     let pass = GBufferPass::new(gpu.device(), 3).unwrap();
     let white = [255u8; 4];
-    // Right texels: roughness in G, metalness in B, transmission in R (linear); the emissive one is sRGB.
-    let data = [128u8, 153, 51, 255];
+    // Right texels: roughness in G, metalness in B, transmission in R, specular in A (linear); the emissive one
+    // is sRGB.
+    let data = [128u8, 153, 51, 64];
     let emissive = [188u8, 128, 64, 255];
     let tilt_u = [255u8, 128, 128, 255];
     let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, Lens::PINHOLE);
@@ -412,8 +413,10 @@ fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_the
     let uses = |texture: usize, transform: Option<UvTransform>| Some(TextureRef { texture, tex_coord: 0, transform });
     let m = &mut scene.materials[0];
     (m.metallic, m.roughness, m.transmission, m.emissive) = (0.5, 0.8, 0.6, Vec3::new(2.0, 1.0, 0.5));
+    m.specular = 0.7;
     m.metallic_roughness_texture = uses(0, right);
     m.transmission_texture = uses(0, right);
+    m.specular_texture = uses(0, right);
     m.emissive_texture = uses(1, right);
     m.normal_texture = uses(2, quarter_turn);
     let primitive = &scene.meshes[0].primitives[0];
@@ -421,6 +424,7 @@ fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_the
     assert!(dpdu.cross(dpdv).length() > 0.1, "the plane needs a tangent frame: {dpdu} {dpdv}");
     let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
     let (metallic, roughness, transmission) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0, 0.6 * 128.0 / 255.0);
+    let specular = 0.7 * 64.0 / 255.0;
     let emission = emission_of(Vec3::new(2.0, 1.0, 0.5), emissive);
     // A quarter turn (KHR_texture_transform's rotation) makes ∂p/∂u' = ∂p/∂v: the texel's +x tilt follows ∂p/∂v.
     let n = Vec3::Y;
@@ -436,6 +440,8 @@ fn texture_transforms_apply_to_every_texture_and_transmission_textures_scale_the
         );
         let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
         assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+        let got = frame.at(GEOMETRIC_NORMAL, x, y)[3];
+        assert!((got - specular).abs() < 1e-3, "({x}, {y}): specular {got}, expected {specular}");
         let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
         assert!((normal - expected_normal).length() < 0.02, "({x}, {y}): normal {normal}, expected {expected_normal}");
     });

@@ -26,7 +26,8 @@ fn document(buffer_entry: Value) -> Value {
     json!({
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_texture_transform", "KHR_lights_punctual", "KHR_materials_emissive_strength",
-                           "KHR_materials_transmission", "KHR_materials_ior", "EXT_made_up_extension"],
+                           "KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_specular",
+                           "EXT_made_up_extension"],
         "scenes": [{"nodes": [0, 1]}],
         "nodes": [{"mesh": 0}, {"translation": [0, 3, 0],
                    "extensions": {"KHR_lights_punctual": {"light": 0}}}],
@@ -42,7 +43,10 @@ fn document(buffer_entry: Value) -> Value {
                 "KHR_materials_emissive_strength": {"emissiveStrength": 6},
                 "KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0,
                     "extensions": {"KHR_texture_transform": {"scale": [3, 1]}}}},
-                "KHR_materials_ior": {"ior": 1.33}
+                "KHR_materials_ior": {"ior": 1.33},
+                "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.8, 0.6],
+                    "specularTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.25, 0]}}},
+                    "specularColorTexture": {"index": 0}}
             },
             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
                 "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2], "rotation": 0}}}},
@@ -132,6 +136,9 @@ fn check(scene: &strata::scene::Scene) {
     assert!((n.apply(Vec2::X) - Vec2::new(0.0, -0.75)).length() < 1e-6, "{:?}", n.apply(Vec2::X));
     let transmission = m.transmission_texture.unwrap().transform.unwrap();
     assert_eq!(transmission.apply(Vec2::new(0.5, 0.5)), Vec2::new(1.5, 0.5));
+    assert_eq!((m.specular, m.specular_color), (0.5, Vec3::new(1.0, 0.8, 0.6)));
+    let specular = m.specular_texture.unwrap().transform.unwrap();
+    assert_eq!(specular.apply(Vec2::new(0.5, 0.5)), Vec2::new(0.75, 0.5));
     let sampler = scene.textures[0].sampler;
     assert_eq!(
         (sampler.wrap_s, sampler.wrap_t),
@@ -146,12 +153,17 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!(light.shape, LightShape::Spot { inner_cone: 0.2, outer_cone: 0.5, radius: 0.0 });
     assert_eq!(light.emission, Vec3::new(4.0, 2.0, 1.0));
     assert_eq!(light.world_from_light.w_axis.truncate(), Vec3::new(0.0, 3.0, 0.0));
-    assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 3, "{:?}", scene.warnings);
     assert!(scene.warnings[0].contains("EXT_made_up_extension"));
     assert!(
         scene.warnings[1].contains("\"lit glass\": its emissive texture uses TEXCOORD_1"),
         "{:?}",
         scene.warnings[1]
+    );
+    assert!(
+        scene.warnings[2].contains("\"lit glass\": its KHR_materials_specular specularColorTexture is not read"),
+        "{:?}",
+        scene.warnings[2]
     );
 }
 

@@ -255,6 +255,31 @@ fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_
     gpu.finish().unwrap();
 }
 
+/// Specular textures (A scales the factor, KHR_materials_specular) are read, through their KHR_texture_transform,
+/// in the G-buffer, at the reference mode's visible hits and at the rays' hits: a texture whose left texel is
+/// opaque and whose right texel clear, transformed onto the right one, renders the showcase as specular 0 does.
+/// (Without the transform the showcase's UVs reach both texels.)
+#[test]
+fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
+    use strata::scene::{Sampler, UvTransform, Wrap};
+    let gpu = GpuTest::new();
+    let original = load(&repo("scenes/showcase.toml"));
+    let mut textured = original.clone();
+    let nearest =
+        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    // Scale 0 in u: every lookup lands on the right texel, whatever the UVs (the floor's run past 1).
+    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
+    let halves = [[255, 255, 255, 255], [255, 255, 255, 0]];
+    let texture = with_texture(&mut textured, "reflects | does not", &halves, nearest, Some(right_half));
+    let mut factors = original.clone();
+    for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
+        t.specular_texture = Some(texture);
+        f.specular = 0.0;
+    }
+    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, "specular 0");
+    gpu.finish().unwrap();
+}
+
 /// Adds a linear (non-colour) texture of one row of `texels` to the scene; returns a use of it.
 fn with_texture(
     scene: &mut Scene,

@@ -12,7 +12,8 @@ struct Shading {
     float roughness;
     float transmission;
     float ior;
-    float specular;  // KHR_materials_specular factor
+    float specular;       // KHR_materials_specular factor (times its texture's alpha)
+    vec3 specular_color;  // KHR_materials_specular colour
 };
 
 float luminance(vec3 c) {
@@ -54,10 +55,11 @@ float smith_visibility(float nl, float nv, float a) {
     return d > 0.0 ? 0.5 / d : 0.0;
 }
 
-// Schlick Fresnel at v·h: dielectric F0 from the IOR scaled by the specular factor, metal F0 the base colour.
+// Schlick Fresnel at v·h. Dielectric F0 from the IOR, tinted by the specular colour and kept at most 1, then
+// F0 and F90 scaled by the specular factor (KHR_materials_specular); metal F0 the base colour.
 vec3 fresnel(Shading m, float vh) {
     float r = (m.ior - 1.0) / (m.ior + 1.0);
-    vec3 f0 = mix(vec3(r * r * m.specular), m.albedo, m.metallic);
+    vec3 f0 = mix(min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular, m.albedo, m.metallic);
     float f90 = mix(m.specular, 1.0, m.metallic);
     float x = clamp(1.0 - vh, 0.0, 1.0);
     float x2 = x * x;

@@ -139,12 +139,17 @@ pub struct GpuMaterial {
     pub bump: GpuBump,
     /// Roughness in G, metalness in B, scaling the factors (glTF 2.0 §3.9.2); -1: none.
     pub metallic_roughness_texture: i32,
-    pub pad: [i32; 3],
+    /// Its alpha channel scales the specular factor (KHR_materials_specular); -1: none.
+    pub specular_texture: i32,
+    pub pad: [i32; 2],
     /// Each texture's KHR_texture_transform: the first two rows of its 3×3 matrix (identity without one).
     pub metallic_roughness_uv_rows: [Vec4; 2],
     pub normal_uv_rows: [Vec4; 2],
     pub emissive_uv_rows: [Vec4; 2],
     pub transmission_uv_rows: [Vec4; 2],
+    /// rgb: the KHR_materials_specular colour, tinting the dielectric F0; w: unused.
+    pub specular_color: Vec4,
+    pub specular_uv_rows: [Vec4; 2],
 }
 
 impl GpuMaterial {
@@ -179,11 +184,14 @@ impl GpuMaterial {
             base_color_uv_rows: uv_rows(m.base_color_texture),
             bump: GpuBump::from_bump(m.bump.as_ref()),
             metallic_roughness_texture: texture(m.metallic_roughness_texture),
-            pad: [0; 3],
+            specular_texture: texture(m.specular_texture),
+            pad: [0; 2],
             metallic_roughness_uv_rows: uv_rows(m.metallic_roughness_texture),
             normal_uv_rows: uv_rows(m.normal_texture),
             emissive_uv_rows: uv_rows(m.emissive_texture),
             transmission_uv_rows: uv_rows(m.transmission_texture),
+            specular_color: m.specular_color.extend(0.0),
+            specular_uv_rows: uv_rows(m.specular_texture),
         }
     }
 }
@@ -210,7 +218,10 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness_texture), 144);
         assert_eq!(offset_of!(GpuMaterial, metallic_roughness_uv_rows), 160);
         assert_eq!(offset_of!(GpuMaterial, transmission_uv_rows), 256);
-        assert_eq!(size_of::<GpuMaterial>(), 288);
+        assert_eq!(offset_of!(GpuMaterial, specular_texture), 148);
+        assert_eq!(offset_of!(GpuMaterial, specular_color), 288);
+        assert_eq!(offset_of!(GpuMaterial, specular_uv_rows), 304);
+        assert_eq!(size_of::<GpuMaterial>(), 336);
     }
 
     #[test]

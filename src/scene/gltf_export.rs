@@ -87,8 +87,11 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
         if m.ior != 1.5 {
             extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
         }
-        if m.specular != 1.0 {
-            extensions.insert("KHR_materials_specular".into(), json!({"specularFactor": m.specular}));
+        if m.specular != 1.0 || m.specular_color != glam::Vec3::ONE {
+            extensions.insert(
+                "KHR_materials_specular".into(),
+                json!({"specularFactor": m.specular, "specularColorFactor": m.specular_color.to_array()}),
+            );
         }
         if m.double_sided {
             material["doubleSided"] = json!(true);

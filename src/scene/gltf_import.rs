@@ -68,6 +68,7 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
     warn_about_second_uv_sets(&mut scene);
+    warn_about_specular_color_textures(document, &mut scene);
     for mesh in document.meshes() {
         let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
         let mut primitives = Vec::new();
@@ -334,6 +335,7 @@ fn warn_about_second_uv_sets(scene: &mut Scene) {
             ("normal", m.normal_texture),
             ("emissive", m.emissive_texture),
             ("transmission", m.transmission_texture),
+            ("specular", m.specular_texture),
         ];
         for (what, t) in uses {
             if let Some(t) = t.filter(|t| t.tex_coord != 0) {
@@ -345,6 +347,18 @@ fn warn_about_second_uv_sets(scene: &mut Scene) {
         }
     }
     scene.warnings.extend(warnings);
+}
+
+/// The specular colour texture is not read (README, known limits): its factor tints every point alike.
+fn warn_about_specular_color_textures(document: &gltf::Document, scene: &mut Scene) {
+    for (gltf_material, m) in document.materials().zip(&scene.materials) {
+        if gltf_material.specular().is_some_and(|s| s.specular_color_texture().is_some()) {
+            scene.warnings.push(format!(
+                "material \"{}\": its KHR_materials_specular specularColorTexture is not read (its specularColorFactor is)",
+                m.name
+            ));
+        }
+    }
 }
 
 fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> {
@@ -382,8 +396,12 @@ fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> 
         transmission: m.transmission().map(|t| t.transmission_factor()).unwrap_or(0.0),
         transmission_texture: m.transmission().and_then(|t| t.transmission_texture()).as_ref().map(texture_ref),
         ior: m.ior().unwrap_or(defaults.ior),
-        // Only the factor: the specular texture and colour are not read.
         specular: m.specular().map(|s| s.specular_factor()).unwrap_or(defaults.specular),
+        specular_texture: m.specular().and_then(|s| s.specular_texture()).as_ref().map(texture_ref),
+        specular_color: m
+            .specular()
+            .map(|s| Vec3::from_array(s.specular_color_factor()))
+            .unwrap_or(defaults.specular_color),
         bump: None,
     })
 }

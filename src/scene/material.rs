@@ -168,6 +168,11 @@ pub struct Material {
     pub ior: f32,
     /// `KHR_materials_specular` factor: scales the dielectric Fresnel reflection (0: a purely diffuse surface).
     pub specular: f32,
+    /// `KHR_materials_specular` texture: its alpha channel scales `specular`.
+    pub specular_texture: Option<TextureRef>,
+    /// `KHR_materials_specular` colour: tints the dielectric reflectance at normal incidence (F0), which stays at
+    /// most 1.
+    pub specular_color: Vec3,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
 }
@@ -194,6 +199,8 @@ impl Default for Material {
             transmission_texture: None,
             ior: 1.5,
             specular: 1.0,
+            specular_texture: None,
+            specular_color: Vec3::ONE,
             bump: None,
         }
     }
