@@ -88,10 +88,11 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
             extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
         }
         if m.specular != 1.0 || m.specular_color != glam::Vec3::ONE {
-            extensions.insert(
-                "KHR_materials_specular".into(),
-                json!({"specularFactor": m.specular, "specularColorFactor": m.specular_color.to_array()}),
-            );
+            let mut specular = json!({"specularFactor": m.specular});
+            if m.specular_color != glam::Vec3::ONE {
+                specular["specularColorFactor"] = json!(m.specular_color.to_array());
+            }
+            extensions.insert("KHR_materials_specular".into(), specular);
         }
         if m.double_sided {
             material["doubleSided"] = json!(true);
