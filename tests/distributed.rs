@@ -382,7 +382,7 @@ fn half_clear_texture(scene: &mut Scene) -> usize {
     let nearest = Sampler {
         mag_linear: false,
         min_linear: false,
-        mipmaps: false,
+        mipmaps: strata::scene::MipFilter::None,
         wrap_s: Wrap::ClampToEdge,
         wrap_t: Wrap::ClampToEdge,
     };
@@ -476,7 +476,7 @@ fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
             let sampler = Sampler {
                 mag_linear: false,
                 min_linear: false,
-                mipmaps: false,
+                mipmaps: strata::scene::MipFilter::None,
                 wrap_s: Wrap::ClampToEdge,
                 wrap_t: Wrap::ClampToEdge,
             };

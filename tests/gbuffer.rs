@@ -403,8 +403,13 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
     };
     let tilted = TextureImage { name: "normal".into(), width: 2, height: 1, rgba8: [tilt_u, tilt_u].concat() };
     scene.images = vec![halves("data", data), halves("emissive", emissive), tilted];
-    let nearest =
-        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    let nearest = Sampler {
+        mag_linear: false,
+        min_linear: false,
+        mipmaps: strata::scene::MipFilter::None,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+    };
     let texture = |name: &str, image: usize, srgb: bool| Texture { name: name.into(), image, sampler: nearest, srgb };
     scene.textures = vec![texture("data", 0, false), texture("emissive", 1, true), texture("normal", 2, false)];
     let right = Some(UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) });
@@ -445,6 +450,46 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
         let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
         assert!((normal - expected_normal).length() < 0.02, "({x}, {y}): normal {normal}, expected {expected_normal}");
     });
+    drop(pass);
+    gpu.finish().unwrap();
+}
+
+/// Minification reads the mip chain where the sampler asks for mipmaps: a black and white checkerboard of
+/// single texels, 256 across a plane that covers about 16 pixels, shows its mean radiance 0.5 at every pixel
+/// (sRGB decoded before the 2×2 averages: averaging the encoded values would give 0.216). Without mipmaps the
+/// same nearest-filtered lookups land on single texels, black or white.
+#[test]
+fn minified_textures_read_their_mip_chain_averaged_in_linear_space() {
+    use strata::render::gbuffer_layout::ALBEDO;
+    use strata::scene::{MipFilter, Sampler, Texture, TextureImage, TextureRef, Wrap};
+    let gpu = common::GpuTest::new();
+    let pass = pass(&gpu);
+    let side = 256u32;
+    let rgba8: Vec<u8> = (0..side * side)
+        .flat_map(|i| {
+            let v = if (i % side + i / side) % 2 == 0 { 255 } else { 0 };
+            [v, v, v, 255]
+        })
+        .collect();
+    let cam = camera(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, Lens::PINHOLE);
+    let mut scene = scene_of(plane(Vec2::splat(2.0), Vec2::ONE, None), Mat4::IDENTITY, None, cam);
+    scene.images = vec![TextureImage { name: "checker".into(), width: side, height: side, rgba8 }];
+    scene.materials[0].base_color_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
+    for mipmaps in [MipFilter::Linear, MipFilter::None] {
+        let sampler =
+            Sampler { mag_linear: false, min_linear: false, mipmaps, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+        scene.textures = vec![Texture { name: "checker".into(), image: 0, sampler, srgb: true }];
+        let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
+        let mut albedos = Vec::new();
+        each_covered_pixel(&frame, |x, y| albedos.push(frame.at(ALBEDO, x, y)[0]));
+        let (low, high) = albedos.iter().fold((f32::MAX, f32::MIN), |(l, h), &a| (l.min(a), h.max(a)));
+        if mipmaps == MipFilter::None {
+            assert!(low < 0.01 && high > 0.99, "level 0 alone: single texels, black and white: {low}..{high}");
+        } else {
+            // The G-buffer stores albedo as 8-bit sRGB: 0.5 comes back within one step (0.0039 here).
+            assert!((low - 0.5).abs() < 0.005 && (high - 0.5).abs() < 0.005, "mipmapped: {low}..{high}, not 0.5");
+        }
+    }
     drop(pass);
     gpu.finish().unwrap();
 }

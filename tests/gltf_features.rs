@@ -144,7 +144,7 @@ fn check(scene: &strata::scene::Scene) {
         (sampler.wrap_s, sampler.wrap_t),
         (strata::scene::Wrap::ClampToEdge, strata::scene::Wrap::MirroredRepeat)
     );
-    assert!(!sampler.mag_linear && sampler.min_linear && !sampler.mipmaps);
+    assert!(!sampler.mag_linear && sampler.min_linear && sampler.mipmaps == strata::scene::MipFilter::None);
     assert!(scene.textures[0].srgb);
     assert_eq!((scene.images[0].width, scene.images[0].height), (2, 2));
 

@@ -241,8 +241,13 @@ fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_
     let original = load(&repo("scenes/showcase.toml"));
     assert!(original.materials.iter().any(|m| m.transmission > 0.0), "the showcase needs glass for this test");
     let mut textured = original.clone();
-    let nearest =
-        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    let nearest = Sampler {
+        mag_linear: false,
+        min_linear: false,
+        mipmaps: strata::scene::MipFilter::None,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+    };
     let right_half = UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) };
     let halves = [[255, 255, 255, 255], [0, 255, 255, 255]];
     let texture = with_texture(&mut textured, "transmits | does not", &halves, nearest, Some(right_half));
@@ -265,8 +270,13 @@ fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_r
     let gpu = GpuTest::new();
     let original = load(&repo("scenes/showcase.toml"));
     let mut textured = original.clone();
-    let nearest =
-        Sampler { mag_linear: false, min_linear: false, mipmaps: false, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+    let nearest = Sampler {
+        mag_linear: false,
+        min_linear: false,
+        mipmaps: strata::scene::MipFilter::None,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+    };
     // Scale 0 in u: every lookup lands on the right texel, whatever the UVs (the floor's run past 1).
     let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
     let halves = [[255, 255, 255, 255], [255, 255, 255, 0]];

@@ -72,6 +72,7 @@ impl AccumulatePass {
                 min_linear: false,
                 address_u: vk::SamplerAddressMode::CLAMP_TO_EDGE,
                 address_v: vk::SamplerAddressMode::CLAMP_TO_EDGE,
+                mipmaps: None,
             },
         )?;
         Ok(Self { pipeline, gbuffer_sampler, device: device.clone() })

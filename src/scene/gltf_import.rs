@@ -4,7 +4,7 @@
 use super::animation::{vec4_from_xyz, Channel, Interpolation, Property};
 use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact};
 use super::gltf_uri::{read_uri, UriPolicy};
-use super::material::{AlphaMode, Material, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+use super::material::{AlphaMode, Material, MipFilter, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
 use super::surface::compute_surface_derivatives;
 use super::{Animation, Camera, Instance, Light, LightShape, Mesh, Node, NodeTransform, Primitive, Projection, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -279,10 +279,12 @@ fn sampler(s: &gltf::texture::Sampler<'_>) -> Sampler {
     let defaults = Sampler::default();
     let (min_linear, mipmaps) = match s.min_filter() {
         None => (defaults.min_linear, defaults.mipmaps),
-        Some(MinFilter::Nearest) => (false, false),
-        Some(MinFilter::Linear) => (true, false),
-        Some(MinFilter::NearestMipmapNearest) | Some(MinFilter::NearestMipmapLinear) => (false, true),
-        Some(MinFilter::LinearMipmapNearest) | Some(MinFilter::LinearMipmapLinear) => (true, true),
+        Some(MinFilter::Nearest) => (false, MipFilter::None),
+        Some(MinFilter::Linear) => (true, MipFilter::None),
+        Some(MinFilter::NearestMipmapNearest) => (false, MipFilter::Nearest),
+        Some(MinFilter::LinearMipmapNearest) => (true, MipFilter::Nearest),
+        Some(MinFilter::NearestMipmapLinear) => (false, MipFilter::Linear),
+        Some(MinFilter::LinearMipmapLinear) => (true, MipFilter::Linear),
     };
     Sampler {
         mag_linear: s.mag_filter().map(|f| f == MagFilter::Linear).unwrap_or(defaults.mag_linear),

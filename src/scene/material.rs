@@ -42,12 +42,21 @@ pub enum Wrap {
     ClampToEdge,
 }
 
+/// How minification moves between mip levels (glTF's `*_MIPMAP_NEAREST` and `*_MIPMAP_LINEAR` filters).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MipFilter {
+    /// No mipmaps: minification reads the full-size image.
+    None,
+    Nearest,
+    Linear,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Sampler {
     pub mag_linear: bool,
     pub min_linear: bool,
-    /// Minification uses mipmaps (any *_MIPMAP_* filter, or unspecified).
-    pub mipmaps: bool,
+    /// Minification through mipmaps (any `*_MIPMAP_*` filter; linear between levels when unspecified).
+    pub mipmaps: MipFilter,
     pub wrap_s: Wrap,
     pub wrap_t: Wrap,
 }
@@ -55,7 +64,13 @@ pub struct Sampler {
 impl Default for Sampler {
     /// glTF leaves filters to the implementation when unset; wrap defaults to REPEAT (§5.26).
     fn default() -> Self {
-        Self { mag_linear: true, min_linear: true, mipmaps: true, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat }
+        Self {
+            mag_linear: true,
+            min_linear: true,
+            mipmaps: MipFilter::Linear,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+        }
     }
 }
 

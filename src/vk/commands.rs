@@ -106,6 +106,10 @@ impl Access {
         Access { stage: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_WRITE };
     pub const TRANSFER_READ: Access =
         Access { stage: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_READ };
+    pub const BLIT_WRITE: Access =
+        Access { stage: vk::PipelineStageFlags2::BLIT, access: vk::AccessFlags2::TRANSFER_WRITE };
+    pub const BLIT_READ: Access =
+        Access { stage: vk::PipelineStageFlags2::BLIT, access: vk::AccessFlags2::TRANSFER_READ };
     pub const HOST_READ: Access = Access { stage: vk::PipelineStageFlags2::HOST, access: vk::AccessFlags2::HOST_READ };
     pub const COLOR_ATTACHMENT_WRITE: Access = Access {
         stage: vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
@@ -179,9 +183,22 @@ pub fn image_barrier(
     from: (vk::ImageLayout, Access),
     to: (vk::ImageLayout, Access),
 ) {
+    image_levels_barrier(device, cmd, image, 0..image.mip_levels, from, to);
+}
+
+/// A layout transition of some mip levels of an image.
+pub fn image_levels_barrier(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    image: &Image,
+    levels: std::ops::Range<u32>,
+    from: (vk::ImageLayout, Access),
+    to: (vk::ImageLayout, Access),
+) {
+    let range = image.subresource_range().base_mip_level(levels.start).level_count(levels.len() as u32);
     let barrier = [vk::ImageMemoryBarrier2::default()
         .image(image.raw)
-        .subresource_range(image.subresource_range())
+        .subresource_range(range)
         .old_layout(from.0)
         .new_layout(to.0)
         .src_stage_mask(from.1.stage)

@@ -11,6 +11,8 @@ pub struct SamplerDesc {
     pub min_linear: bool,
     pub address_u: vk::SamplerAddressMode,
     pub address_v: vk::SamplerAddressMode,
+    /// How minification moves between mip levels; `None`: level 0 only.
+    pub mipmaps: Option<vk::SamplerMipmapMode>,
 }
 
 pub struct Sampler {
@@ -24,11 +26,11 @@ impl Sampler {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(filter(desc.mag_linear))
             .min_filter(filter(desc.min_linear))
-            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .mipmap_mode(desc.mipmaps.unwrap_or(vk::SamplerMipmapMode::NEAREST))
             .address_mode_u(desc.address_u)
             .address_mode_v(desc.address_v)
             .address_mode_w(vk::SamplerAddressMode::REPEAT)
-            .max_lod(0.0);
+            .max_lod(if desc.mipmaps.is_some() { vk::LOD_CLAMP_NONE } else { 0.0 });
         let raw =
             unsafe { device.raw.create_sampler(&info, None) }.with_context(|| format!("vkCreateSampler {name}"))?;
         device.set_name(raw, name);
