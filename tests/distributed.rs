@@ -599,3 +599,43 @@ fn the_specular_colour_tints_a_dielectric_mirror_by_its_clamped_f0() {
     }
     gpu.finish().unwrap();
 }
+
+/// glTF's BRDF mixes the dielectric and the metal by metalness (glTF 2.0 Appendix B), so a partial metal lit
+/// directly is the mix of the two, sample for sample: the light points are the same, and without transmission
+/// neither the MIS weights nor the lobe choice depend on metalness. (The dielectric's base layer keeps
+/// 1 − F_dielectric of the light, not 1 − F of the mixed material.) Metalness 0.2 = 51/255 passes the G-buffer's
+/// 8-bit channel exactly.
+#[test]
+fn direct_light_is_linear_in_metalness() {
+    use strata::render::frame::{render_frame, FrameOptions};
+    use strata::render::SceneOnGpu;
+    let gpu = GpuTest::new();
+    let lit = |metallic: f32| {
+        let mut scene = shadow_scene(LightShape::Quad { size: Vec2::splat(1.0) }, 10.0, false);
+        let ground = &mut scene.materials[0];
+        ground.base_color = glam::Vec4::new(0.9, 0.6, 0.3, 1.0);
+        (ground.metallic, ground.roughness, ground.specular) = (metallic, 0.4, 1.0);
+        scene.camera = Some(ortho_down(Vec3::ZERO, 1.0, 3.0));
+        let on_gpu = SceneOnGpu::upload(gpu.device(), &scene).unwrap();
+        let direct_only = FrameOptions { max_depth: 1, ..Default::default() };
+        let s = settings(48, 48, 4, SamplerKind::Jittered);
+        render_frame(gpu.device(), &scene, &on_gpu, &s, &direct_only, &mut |_, _| true).unwrap().linear
+    };
+    let t = 51.0 / 255.0;
+    let (dielectric, partial, metal) = (lit(0.0), lit(t), lit(1.0));
+    let brightest = metal.pixels.iter().chain(&dielectric.pixels).map(|p| p[0]).fold(0.0f32, f32::max);
+    let mut differing = 0;
+    for (i, ((d, p), m)) in dielectric.pixels.iter().zip(&partial.pixels).zip(&metal.pixels).enumerate() {
+        for c in 0..3 {
+            let mix = d[c] + (m[c] - d[c]) * t;
+            assert!(
+                (p[c] - mix).abs() <= 1e-4 * brightest,
+                "pixel {i} channel {c}: metalness {t}: {}, mix {mix}",
+                p[c]
+            );
+        }
+        differing += usize::from((d[0] - m[0]).abs() > 0.05 * brightest);
+    }
+    assert!(differing > 500, "the metal and the dielectric must look different: {differing} pixels do");
+    gpu.finish().unwrap();
+}

@@ -55,15 +55,21 @@ float smith_visibility(float nl, float nv, float a) {
     return d > 0.0 ? 0.5 / d : 0.0;
 }
 
-// Schlick Fresnel at v·h. Dielectric F0 from the IOR, tinted by the specular colour and kept at most 1, then
-// F0 and F90 scaled by the specular factor (KHR_materials_specular); metal F0 the base colour.
-vec3 fresnel(Shading m, float vh) {
+// The material's Fresnel reflectance at v·h (Schlick), glTF 2.0 Appendix B: the dielectric's (F0 from the
+// IOR, tinted by the specular colour and kept at most 1, F0 and F90 scaled by the specular factor:
+// KHR_materials_specular) and the metal's (F0 the base colour), mixed by metalness. `base_share` is what the
+// dielectric leaves to its base layer (diffuse and transmission): 1 − max(F_dielectric), the extension's
+// fresnel_mix; the metal has no base layer.
+vec3 fresnel(Shading m, float vh, out float base_share) {
     float r = (m.ior - 1.0) / (m.ior + 1.0);
-    vec3 f0 = mix(min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular, m.albedo, m.metallic);
-    float f90 = mix(m.specular, 1.0, m.metallic);
+    vec3 f0 = min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
     float x = clamp(1.0 - vh, 0.0, 1.0);
     float x2 = x * x;
-    return f0 + (vec3(f90) - f0) * (x2 * x2 * x);
+    float w = x2 * x2 * x;
+    vec3 dielectric = f0 + (vec3(m.specular) - f0) * w;
+    vec3 metal = m.albedo + (vec3(1.0) - m.albedo) * w;
+    base_share = 1.0 - max(dielectric.x, max(dielectric.y, dielectric.z));
+    return mix(dielectric, metal, m.metallic);
 }
 
 // BRDF × cos for light arriving from l, seen from v, split into the diffuse and the specular lobe: the diffuse
@@ -76,17 +82,19 @@ void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 spec
     if (nl <= 0.0) return;
     float nv = max(dot(n, v), 1e-4);
     vec3 h = normalize(l + v);
-    vec3 f = fresnel(m, max(dot(v, h), 0.0));
-    diffuse = (1.0 - f) * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
+    float base_share;
+    vec3 f = fresnel(m, max(dot(v, h), 0.0), base_share);
+    diffuse = base_share * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
     float a = ggx_alpha(m.roughness);
     specular = f * ggx_d(max(dot(n, h), 0.0), a) * smith_visibility(nl, nv, a) * nl;
 }
 
 // The probability of choosing reflection at microfacet normal h (the rest refracts).
 float reflect_probability(Shading m, float vh) {
-    vec3 f = fresnel(m, vh);
+    float base_share;
+    vec3 f = fresnel(m, vh, base_share);
     float pr = luminance(f);
-    float pt = luminance((1.0 - f) * m.transmission * (1.0 - m.metallic) * m.albedo);
+    float pt = luminance(base_share * m.transmission * (1.0 - m.metallic) * m.albedo);
     return pr + pt > 0.0 ? pr / (pr + pt) : 0.0;
 }
 
@@ -143,9 +151,9 @@ bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lob
     vec3 he = sample_ggx_vndf(ve, a, u);
     vec3 h = normalize(t * he.x + b * he.y + n * he.z);
     float vh = max(dot(v, h), 0.0);
-    vec3 f = fresnel(m, vh);
-    vec3 reflect_weight = f;
-    vec3 transmit_weight = (1.0 - f) * m.transmission * (1.0 - m.metallic) * m.albedo;
+    float base_share;
+    vec3 reflect_weight = fresnel(m, vh, base_share);
+    vec3 transmit_weight = base_share * m.transmission * (1.0 - m.metallic) * m.albedo;
     float pr = luminance(reflect_weight);
     float pt = luminance(transmit_weight);
     if (!(pr + pt > 0.0)) return false;
