@@ -70,17 +70,28 @@ vec2 hit_uv(TriangleHit h) {
     return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
 }
 
+vec2 hit_uv1(TriangleHit h) {
+    Vec2Array uvs = Vec2Array(h.r.uvs1);
+    return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
+}
+
+// Whether any texture the hit shading reads takes TEXCOORD_1 (normal textures read TEXCOORD_0).
+bool any_texture_reads_uv1(GpuMaterial m) {
+    return reads_uv1(m.base_color_uv_rows) || reads_uv1(m.metallic_roughness_uv_rows) ||
+           reads_uv1(m.emissive_uv_rows) || reads_uv1(m.transmission_uv_rows) || reads_uv1(m.specular_uv_rows);
+}
+
 vec4 hit_color(TriangleHit h) {
     Vec4Array colors = Vec4Array(h.r.colors);
     return h.w.x * colors.v[h.i0] + h.w.y * colors.v[h.i1] + h.w.z * colors.v[h.i2];
 }
 
-// Whether an alpha-tested material covers a point with this vertex colour alpha and UV: the rule of
+// Whether an alpha-tested material covers a point with this vertex colour alpha and these UVs: the rule of
 // gbuffer.frag's discard (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
-bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv) {
+bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1) {
     float alpha = m.base_color.a * vertex_alpha;
     if (m.base_color_texture >= 0) {
-        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0).a;
+        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv0, uv1), 0.0).a;
     }
     return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
 }
@@ -90,7 +101,9 @@ bool alpha_covers(rayQueryEXT q) {
     TriangleHit h = triangle_hit(
         rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false),
         uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)), rayQueryGetIntersectionBarycentricsEXT(q, false));
-    return material_covers(materials[h.r.material], hit_color(h).a, hit_uv(h));
+    GpuMaterial m = materials[h.r.material];
+    vec2 uv0 = hit_uv(h);
+    return material_covers(m, hit_color(h).a, uv0, reads_uv1(m.base_color_uv_rows) ? hit_uv1(h) : uv0);
 }
 
 // The flags every ray query starts with, besides its own.
@@ -196,12 +209,13 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
         // emissive texture scales the radiance, and where alpha-masking cuts the surface out nothing emits.
         GpuMaterial m = materials[int(l.uv2_material.z)];
         vec3 w = vec3(1.0 - ls.bary.x - ls.bary.y, ls.bary);
-        vec2 uv = w.x * l.uv01.xy + w.y * l.uv01.zw + w.z * l.uv2_material.xy;
-        if (ALPHA_TESTED != 0u && m.alpha_mode != 0 && !material_covers(m, dot(w, l.corner_alpha.xyz), uv)) {
+        vec2 uv0 = w.x * l.uv01.xy + w.y * l.uv01.zw + w.z * l.uv2_material.xy;
+        vec2 uv1 = w.x * l.uv1_01.xy + w.y * l.uv1_01.zw + w.z * l.uv1_2.xy;
+        if (ALPHA_TESTED != 0u && m.alpha_mode != 0 && !material_covers(m, dot(w, l.corner_alpha.xyz), uv0, uv1)) {
             return vec3(0.0);
         }
         if (m.emissive_texture >= 0) {
-            ls.value *= textureLod(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, uv), 0.0).rgb;
+            ls.value *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv0, uv1), 0.0).rgb;
         }
     }
     if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
@@ -279,10 +293,11 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     if (dot(s.normal, s.geometric) < 0.0) s.geometric = -s.geometric;
 
     GpuMaterial m = materials[h.r.material];
+    vec2 uv1 = any_texture_reads_uv1(m) ? hit_uv1(h) : uv;
     vec4 base = m.base_color;
     if (visible) base *= hit_color(h);
     if (m.base_color_texture >= 0) {
-        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, uv), 0.0);
+        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1), 0.0);
     }
     if (visible) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
@@ -308,26 +323,26 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     }
     s.emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) {
-        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, uv), 0.0).rgb;
+        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv, uv1), 0.0).rgb;
     }
     s.m.albedo = base.rgb;
     // Metalness in B, roughness in G (glTF 2.0 §3.9.2), as gbuffer.frag reads them.
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);
     if (m.metallic_roughness_texture >= 0) {
         metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)],
-                                         transform_uv(m.metallic_roughness_uv_rows, uv), 0.0).bg;
+                                         texture_uv(m.metallic_roughness_uv_rows, uv, uv1), 0.0).bg;
     }
     s.m.metallic = metallic_roughness.x;
     s.m.roughness = metallic_roughness.y;
     s.m.transmission = m.transmission;
     if (m.transmission_texture >= 0) {
         s.m.transmission *= textureLod(textures[nonuniformEXT(m.transmission_texture)],
-                                       transform_uv(m.transmission_uv_rows, uv), 0.0).r;
+                                       texture_uv(m.transmission_uv_rows, uv, uv1), 0.0).r;
     }
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
     if (m.specular_texture >= 0) {
-        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], transform_uv(m.specular_uv_rows, uv), 0.0).a;
+        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, uv, uv1), 0.0).a;
     }
     s.m.specular_color = m.specular_color.rgb;
     face_viewer(s, v);

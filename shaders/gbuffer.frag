@@ -14,6 +14,7 @@ layout(location = 3) in vec4 in_color;
 layout(location = 4) in vec3 in_dpdu;
 layout(location = 5) in vec3 in_dpdv;
 layout(location = 6) flat in uint in_draw;
+layout(location = 7) in vec2 in_uv1;
 
 layout(location = 0) out vec4 out_position;
 layout(location = 1) out vec4 out_shading_normal;
@@ -29,7 +30,7 @@ void main() {
 
     vec4 base = m.base_color * in_color;
     if (m.base_color_texture >= 0) {
-        base *= texture(textures[nonuniformEXT(m.base_color_texture)], transform_uv(m.base_color_uv_rows, in_uv));
+        base *= texture(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, in_uv, in_uv1));
     }
     // MASK discards below the cutoff; BLEND is drawn as coverage at 0.5 (no order-independent transparency).
     if ((m.alpha_mode == 1 && base.a < m.alpha_cutoff) || (m.alpha_mode == 2 && base.a < 0.5)) discard;
@@ -68,7 +69,7 @@ void main() {
     // The specular factor rides in the geometric normal's spare channel (16-bit float).
     float specular = m.emissive.w;
     if (m.specular_texture >= 0) {
-        specular *= texture(textures[nonuniformEXT(m.specular_texture)], transform_uv(m.specular_uv_rows, in_uv)).a;
+        specular *= texture(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, in_uv, in_uv1)).a;
     }
     out_geometric_normal = vec4(geometric, specular);
     out_albedo = base;
@@ -76,16 +77,16 @@ void main() {
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);  // metalness in B, roughness in G
     if (m.metallic_roughness_texture >= 0) {
         metallic_roughness *= texture(textures[nonuniformEXT(m.metallic_roughness_texture)],
-                                      transform_uv(m.metallic_roughness_uv_rows, in_uv)).bg;
+                                      texture_uv(m.metallic_roughness_uv_rows, in_uv, in_uv1)).bg;
     }
     vec3 emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) {
-        emission *= texture(textures[nonuniformEXT(m.emissive_texture)], transform_uv(m.emissive_uv_rows, in_uv)).rgb;
+        emission *= texture(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, in_uv, in_uv1)).rgb;
     }
     float transmission = m.transmission;
     if (m.transmission_texture >= 0) {
         transmission *=
-            texture(textures[nonuniformEXT(m.transmission_texture)], transform_uv(m.transmission_uv_rows, in_uv)).r;
+            texture(textures[nonuniformEXT(m.transmission_texture)], texture_uv(m.transmission_uv_rows, in_uv, in_uv1)).r;
     }
     out_material = vec4(metallic_roughness, transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
     out_emission = vec4(emission, 0.0);

@@ -10,6 +10,7 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_color;
 layout(location = 4) in vec3 in_dpdu;
 layout(location = 5) in vec3 in_dpdv;
+layout(location = 6) in vec2 in_uv1;
 
 layout(location = 0) out vec3 out_world_position;
 layout(location = 1) out vec3 out_world_normal;
@@ -18,6 +19,7 @@ layout(location = 3) out vec4 out_color;
 layout(location = 4) out vec3 out_dpdu;
 layout(location = 5) out vec3 out_dpdv;
 layout(location = 6) flat out uint out_draw;
+layout(location = 7) out vec2 out_uv1;
 
 void main() {
     GBufferDraw d = draws[gl_InstanceIndex];
@@ -30,6 +32,7 @@ void main() {
     out_dpdu = mat3(d.world_from_object) * in_dpdu;
     out_dpdv = mat3(d.world_from_object) * in_dpdv;
     out_uv = in_uv;
+    out_uv1 = in_uv1;
     out_color = in_color;
     out_draw = gl_InstanceIndex;
 }

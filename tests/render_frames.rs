@@ -290,6 +290,41 @@ fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_r
     gpu.finish().unwrap();
 }
 
+/// Textures read the UV set they name: a base-colour texture, black on its left texel and white on its right,
+/// read through a TEXCOORD_1 that sends every lookup to the white texel renders the showcase exactly as no
+/// texture does, in both modes and at the rays' hits; read through TEXCOORD_0 (whose coordinates reach both
+/// texels) it does not.
+#[test]
+fn textures_on_the_second_uv_set_read_it_in_both_modes_and_at_ray_hits() {
+    use strata::scene::{MipFilter, Sampler, TextureRef, Wrap};
+    let gpu = GpuTest::new();
+    let original = load(&repo("scenes/showcase.toml"));
+    let mut on_uv1 = original.clone();
+    for p in on_uv1.meshes.iter_mut().flat_map(|m| &mut m.primitives) {
+        p.uvs1 = vec![Vec2::new(0.75, 0.5); p.positions.len()];
+    }
+    let nearest = Sampler {
+        mag_linear: false,
+        min_linear: false,
+        mipmaps: MipFilter::None,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+    };
+    let texture = with_texture(&mut on_uv1, "black | white", &[[0, 0, 0, 255], [255; 4]], nearest, None);
+    let mut on_uv0 = on_uv1.clone();
+    for (uv1, uv0) in on_uv1.materials.iter_mut().zip(&mut on_uv0.materials) {
+        uv1.base_color_texture = Some(TextureRef { tex_coord: 1, ..texture });
+        uv0.base_color_texture = Some(texture);
+    }
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(64, 36, 2, SamplerKind::Jittered) };
+        let untextured = render(gpu.device(), &original, &s).linear;
+        assert!(render(gpu.device(), &on_uv1, &s).linear == untextured, "{primary:?}: TEXCOORD_1 was not read");
+        assert!(render(gpu.device(), &on_uv0, &s).linear != untextured, "{primary:?}: TEXCOORD_0 reads the same");
+    }
+    gpu.finish().unwrap();
+}
+
 /// Adds a linear (non-colour) texture of one row of `texels` to the scene; returns a use of it.
 fn with_texture(
     scene: &mut Scene,

@@ -20,6 +20,8 @@ struct GpuLight {
     vec4 uv01;           // emissive triangles: TEXCOORD_0 of p0 (xy) and p1 (zw), untransformed
     vec4 uv2_material;   // emissive triangles: TEXCOORD_0 of p2 (xy), z material (-1: not geometry)
     vec4 corner_alpha;   // emissive triangles: COLOR_0 alpha at p0, p1, p2 (xyz)
+    vec4 uv1_01;         // emissive triangles: TEXCOORD_1 of p0 (xy) and p1 (zw)
+    vec4 uv1_2;          // emissive triangles: TEXCOORD_1 of p2 (xy)
 };
 
 struct GpuPrimitiveRecord {
@@ -32,6 +34,7 @@ struct GpuPrimitiveRecord {
     uint64_t dpdv;
     uint material;
     uint pad0;
+    uint64_t uvs1;  // TEXCOORD_1 (TEXCOORD_0's values without it)
 };
 
 struct GpuCamera {

@@ -58,6 +58,16 @@ vec2 transform_uv(vec4 rows[2], vec2 uv) {
     return vec2(dot(rows[0].xyz, h), dot(rows[1].xyz, h));
 }
 
+// Whether a texture reads TEXCOORD_1 (its rows' spare channel; GpuMaterial::new), not TEXCOORD_0.
+bool reads_uv1(vec4 rows[2]) {
+    return rows[0].w != 0.0;
+}
+
+// A texture's coordinates: its set's UV through its transform.
+vec2 texture_uv(vec4 rows[2], vec2 uv0, vec2 uv1) {
+    return transform_uv(rows, reads_uv1(rows) ? uv1 : uv0);
+}
+
 // The surface derivatives with respect to a texture's transformed coordinates uv' = A·uv + t: [∂p/∂u' ∂p/∂v'] =
 // [∂p/∂u ∂p/∂v]·A⁻¹, so a rotated or scaled normal texture keeps its tangent frame on the surface.
 void transform_derivatives(vec4 rows[2], inout vec3 dpdu, inout vec3 dpdv) {

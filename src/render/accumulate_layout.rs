@@ -42,6 +42,10 @@ pub struct GpuLight {
     /// Emissive triangles: COLOR_0's alpha at p0, p1 and p2 (xyz; 1 without vertex colours), which alpha-masked
     /// materials multiply in; w: unused.
     pub corner_alpha: Vec4,
+    /// Emissive triangles: TEXCOORD_1 (TEXCOORD_0 without it) of p0 (xy) and p1 (zw), for textures that read it.
+    pub uv1_01: Vec4,
+    /// Emissive triangles: TEXCOORD_1 of p2 (xy); zw: unused.
+    pub uv1_2: Vec4,
 }
 
 /// What the shader needs to shade a ray's hit on a primitive: its vertex streams by device address
@@ -61,6 +65,8 @@ pub struct GpuPrimitiveRecord {
     pub dpdv: u64,
     pub material: u32,
     pub pad: u32,
+    /// TEXCOORD_1 (TEXCOORD_0's values without it), for textures that read the second set.
+    pub uvs1: u64,
 }
 
 /// One sample's camera for primary rays traced per pixel (`Primary::Rays`): the thin lens of DESIGN.md in the
@@ -133,11 +139,13 @@ mod tests {
 
     #[test]
     fn layouts_match_the_glsl_structs() {
-        assert_eq!(size_of::<GpuLight>(), 144);
+        assert_eq!(size_of::<GpuLight>(), 176);
+        assert_eq!(offset_of!(GpuLight, uv1_2), 160);
         assert_eq!(offset_of!(GpuLight, uv2_material), 112);
         assert_eq!(offset_of!(GpuLight, corner_alpha), 128);
         assert_eq!(offset_of!(GpuLight, emission), 64);
-        assert_eq!(size_of::<GpuPrimitiveRecord>(), 64);
+        assert_eq!(size_of::<GpuPrimitiveRecord>(), 72);
+        assert_eq!(offset_of!(GpuPrimitiveRecord, uvs1), 64);
         assert_eq!(offset_of!(GpuPrimitiveRecord, dpdv), 48);
         assert_eq!(offset_of!(GpuPrimitiveRecord, material), 56);
         assert_eq!(size_of::<GpuCamera>(), 96);

@@ -111,13 +111,14 @@ pub struct GBufferPass {
     device: Arc<Device>,
 }
 
-const VERTEX_STREAMS: [(u32, vk::Format); 6] = [
+const VERTEX_STREAMS: [(u32, vk::Format); 7] = [
     (12, vk::Format::R32G32B32_SFLOAT),    // position
     (12, vk::Format::R32G32B32_SFLOAT),    // normal
     (8, vk::Format::R32G32_SFLOAT),        // uv
     (16, vk::Format::R32G32B32A32_SFLOAT), // colour
     (12, vk::Format::R32G32B32_SFLOAT),    // dpdu
     (12, vk::Format::R32G32B32_SFLOAT),    // dpdv
+    (8, vk::Format::R32G32_SFLOAT),        // uv1
 ];
 
 impl GBufferPass {
@@ -302,9 +303,10 @@ impl GBufferPass {
                     primitive.colors.raw,
                     primitive.dpdu.raw,
                     primitive.dpdv.raw,
+                    primitive.uvs1.raw,
                 ];
                 unsafe {
-                    device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &[0; 6]);
+                    device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &[0; 7]);
                     device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
                     // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).
                     device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, (first_draw + draw_index) as u32);

@@ -157,9 +157,12 @@ impl GpuMaterial {
         let texture = |t: Option<crate::scene::TextureRef>| {
             t.filter(|t| t.texture < texture_count).map(|t| t.texture as i32).unwrap_or(-1)
         };
+        // The first row's spare w says which UV set the texture reads: 1 for TEXCOORD_1, else TEXCOORD_0 (the
+        // importer warns about the sets strata does not load).
         let uv_rows = |t: Option<crate::scene::TextureRef>| {
             let uv = t.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
-            [uv.row(0).extend(0.0), uv.row(1).extend(0.0)]
+            let set = if t.is_some_and(|t| t.tex_coord == 1) { 1.0 } else { 0.0 };
+            [uv.row(0).extend(set), uv.row(1).extend(0.0)]
         };
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (0, 0.0),
@@ -187,7 +190,8 @@ impl GpuMaterial {
             specular_texture: texture(m.specular_texture),
             pad: [0; 2],
             metallic_roughness_uv_rows: uv_rows(m.metallic_roughness_texture),
-            normal_uv_rows: uv_rows(m.normal_texture),
+            // The tangent frame (dpdu, dpdv) follows TEXCOORD_0, so normal textures read it.
+            normal_uv_rows: uv_rows(m.normal_texture.map(|t| crate::scene::TextureRef { tex_coord: 0, ..t })),
             emissive_uv_rows: uv_rows(m.emissive_texture),
             transmission_uv_rows: uv_rows(m.transmission_texture),
             specular_color: m.specular_color.extend(0.0),

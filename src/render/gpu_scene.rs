@@ -11,6 +11,8 @@ pub struct GpuPrimitive {
     pub normals: Buffer,
     /// TEXCOORD_0, zeros when the mesh has none.
     pub uvs: Buffer,
+    /// TEXCOORD_1, TEXCOORD_0's values when the mesh has none (a material asking for set 1 then reads set 0).
+    pub uvs1: Buffer,
     /// COLOR_0 as linear RGBA, white when the mesh has none.
     pub colors: Buffer,
     /// Surface derivatives Q_u and Q_v, zeros when the mesh has no UVs (bump mapping is then off).
@@ -57,6 +59,8 @@ impl GpuScene {
                     Buffer::device_local_with_data(device, &format!("{name} normals"), &p.normals, by_address, 16)?;
                 let uv_data = if p.uvs.is_empty() { vec![glam::Vec2::ZERO; p.positions.len()] } else { p.uvs.clone() };
                 let uvs = Buffer::device_local_with_data(device, &format!("{name} uvs"), &uv_data, by_address, 16)?;
+                let uv1_data = if p.uvs1.len() == p.positions.len() { p.uvs1.clone() } else { uv_data };
+                let uvs1 = Buffer::device_local_with_data(device, &format!("{name} uvs1"), &uv1_data, by_address, 16)?;
                 let color_data =
                     if p.colors.is_empty() { vec![glam::Vec4::ONE; p.positions.len()] } else { p.colors.clone() };
                 let colors =
@@ -79,6 +83,7 @@ impl GpuScene {
                     positions,
                     normals,
                     uvs,
+                    uvs1,
                     colors,
                     dpdu,
                     dpdv,

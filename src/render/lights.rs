@@ -59,6 +59,8 @@ impl LightSet {
                 uv01: Vec4::ZERO,
                 uv2_material: Vec4::new(0.0, 0.0, -1.0, 0.0),
                 corner_alpha: Vec4::ONE,
+                uv1_01: Vec4::ZERO,
+                uv1_2: Vec4::ZERO,
             };
             let power = match light.shape {
                 LightShape::Point { radius } => {
@@ -130,6 +132,12 @@ impl LightSet {
                     };
                     let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
                     let uv = [0, 1, 2].map(|k| primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
+                    // As uploaded (render::gpu_scene): TEXCOORD_0's values where the mesh has no TEXCOORD_1.
+                    let uv1 = if primitive.uvs1.len() == primitive.positions.len() {
+                        [0, 1, 2].map(|k| primitive.uvs1[tri[k] as usize])
+                    } else {
+                        uv
+                    };
                     let alpha = [0, 1, 2].map(|k| primitive.colors.get(tri[k] as usize).map_or(1.0, |c| c.w));
                     let (e1, e2) = (p1 - p0, p2 - p0);
                     let cross = e1.cross(e2);
@@ -156,6 +164,8 @@ impl LightSet {
                         uv01: uv[0].extend(uv[1].x).extend(uv[1].y),
                         uv2_material: uv[2].extend(material_index as f32).extend(0.0),
                         corner_alpha: Vec3::from_array(alpha).extend(1.0),
+                        uv1_01: uv1[0].extend(uv1[1].x).extend(uv1[1].y),
+                        uv1_2: uv1[2].extend(0.0).extend(0.0),
                     });
                     powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
                 }

@@ -126,8 +126,9 @@ impl PreviewPass {
         let view_from_world = camera.view_from_world();
         let clip_from_world = camera.clip_from_view(width as f32 / height as f32) * view_from_world;
 
-        // One record per (instance, primitive), in draw order.
+        // One record per (instance, primitive), in draw order; and which UV set each draw's texture reads.
         let mut draws = Vec::new();
+        let mut reads_uv1 = Vec::new();
         for instance in &scene.instances {
             let view_normal = Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
             for primitive in &gpu_scene.meshes[instance.mesh].primitives {
@@ -142,6 +143,7 @@ impl PreviewPass {
                     base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(-1),
                     pad: [0; 3],
                 });
+                reads_uv1.push(texture.is_some_and(|t| t.tex_coord == 1));
             }
         }
         if draws.is_empty() {
@@ -192,12 +194,13 @@ impl PreviewPass {
                 crate::vk::commands::set_full_viewport(device, cmd, extent);
                 self.pipeline.bind(cmd, Some(&set), &[]);
                 let primitives = scene.instances.iter().flat_map(|i| gpu_scene.meshes[i.mesh].primitives.iter());
-                for (draw_index, primitive) in primitives.enumerate() {
+                for ((draw_index, primitive), &uv1) in primitives.enumerate().zip(&reads_uv1) {
+                    let uvs = if uv1 { primitive.uvs1.raw } else { primitive.uvs.raw };
                     unsafe {
                         device.raw.cmd_bind_vertex_buffers(
                             cmd,
                             0,
-                            &[primitive.positions.raw, primitive.normals.raw, primitive.uvs.raw, primitive.colors.raw],
+                            &[primitive.positions.raw, primitive.normals.raw, uvs, primitive.colors.raw],
                             &[0, 0, 0, 0],
                         );
                         device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);

@@ -61,6 +61,7 @@ impl RayScene {
                     dpdv: p.dpdv.address,
                     material: p.material.map(|m| m as u32).unwrap_or(default_material),
                     pad: 0,
+                    uvs1: p.uvs1.address,
                 });
             }
             let blas = AccelerationStructure::build_blas(device, &format!("{} BLAS", mesh.name), &geometries)

@@ -67,7 +67,7 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
         .collect();
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
-    warn_about_second_uv_sets(&mut scene);
+    warn_about_unread_uv_sets(&mut scene);
     warn_about_specular_color_textures(document, &mut scene);
     for mesh in document.meshes() {
         let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
@@ -327,20 +327,21 @@ fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> UvTransform
     UvTransform { offset: Vec2::from_array(offset), rotation, scale: Vec2::from_array(scale) }
 }
 
-/// strata reads every texture on TEXCOORD_0 (README, known limits): say so where a material asks for another set.
-fn warn_about_second_uv_sets(scene: &mut Scene) {
+/// strata loads TEXCOORD_0 and TEXCOORD_1, and normal textures follow TEXCOORD_0 (their tangent frame is its
+/// derivatives; README, known limits): say so where a material asks for another set.
+fn warn_about_unread_uv_sets(scene: &mut Scene) {
     let mut warnings = Vec::new();
     for m in &scene.materials {
         let uses = [
-            ("base colour", m.base_color_texture),
-            ("metallic-roughness", m.metallic_roughness_texture),
-            ("normal", m.normal_texture),
-            ("emissive", m.emissive_texture),
-            ("transmission", m.transmission_texture),
-            ("specular", m.specular_texture),
+            ("base colour", m.base_color_texture, 1),
+            ("metallic-roughness", m.metallic_roughness_texture, 1),
+            ("normal", m.normal_texture, 0),
+            ("emissive", m.emissive_texture, 1),
+            ("transmission", m.transmission_texture, 1),
+            ("specular", m.specular_texture, 1),
         ];
-        for (what, t) in uses {
-            if let Some(t) = t.filter(|t| t.tex_coord != 0) {
+        for (what, t, last_read) in uses {
+            if let Some(t) = t.filter(|t| t.tex_coord > last_read) {
                 warnings.push(format!(
                     "material \"{}\": its {what} texture uses TEXCOORD_{}; strata reads it with TEXCOORD_0",
                     m.name, t.tex_coord
