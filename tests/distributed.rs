@@ -372,24 +372,17 @@ fn a_point_lights_range_windows_its_light_as_khr_lights_punctual_recommends() {
 /// A 2×1 texture, nearest-sampled and clamped, whose left texel (u < 0.5) is opaque grey and right texel clear
 /// (alpha 0); returns its texture index.
 fn half_clear_texture(scene: &mut Scene) -> usize {
-    use strata::scene::{Sampler, Texture, TextureImage, Wrap};
+    use strata::scene::{Texture, TextureImage, Wrap};
     scene.images.push(TextureImage {
         name: "half clear".into(),
         width: 2,
         height: 1,
         rgba8: vec![200, 200, 200, 255, 200, 200, 200, 0],
     });
-    let nearest = Sampler {
-        mag_linear: false,
-        min_linear: false,
-        mipmaps: strata::scene::MipFilter::None,
-        wrap_s: Wrap::ClampToEdge,
-        wrap_t: Wrap::ClampToEdge,
-    };
     scene.textures.push(Texture {
         name: "half clear".into(),
         image: scene.images.len() - 1,
-        sampler: nearest,
+        sampler: nearest_sampler(Wrap::ClampToEdge),
         srgb: true,
     });
     scene.textures.len() - 1
@@ -461,7 +454,7 @@ fn alpha_masked_surfaces_are_cut_out_for_shadow_and_primary_rays() {
 /// texture's KHR_texture_transform: here one that keeps every lookup on the lit texel of a lit/black pair.)
 #[test]
 fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
-    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+    use strata::scene::{Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = GpuTest::new();
     // Stored linear here, so the comparison is about the lighting, not lavapipe's sRGB decoding (which glTF's
     // emissive textures go through and which differed from an exact decode by 0.17% in this test).
@@ -473,13 +466,7 @@ fn emissive_textured_surfaces_light_the_scene_like_their_colour() {
         if textured {
             let rgba8 = [texel, [0, 0, 0, 255]].concat();
             scene.images.push(TextureImage { name: "lamp".into(), width: 2, height: 1, rgba8 });
-            let sampler = Sampler {
-                mag_linear: false,
-                min_linear: false,
-                mipmaps: strata::scene::MipFilter::None,
-                wrap_s: Wrap::ClampToEdge,
-                wrap_t: Wrap::ClampToEdge,
-            };
+            let sampler = nearest_sampler(Wrap::ClampToEdge);
             scene.textures.push(Texture { name: "lamp".into(), image: 0, sampler, srgb: false });
             // u' = 0.4 u stays on the left texel; untransformed, half the lamp would be black.
             let transform = Some(UvTransform { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::new(0.4, 1.0) });

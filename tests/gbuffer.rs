@@ -384,7 +384,7 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
 #[test]
 fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textures_scale_their_factors() {
     use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL};
-    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
+    use strata::scene::{Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = common::GpuTest::new();
     let pass = GBufferPass::new(gpu.device(), 3).unwrap();
     let white = [255u8; 4];
@@ -403,13 +403,7 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
     };
     let tilted = TextureImage { name: "normal".into(), width: 2, height: 1, rgba8: [tilt_u, tilt_u].concat() };
     scene.images = vec![halves("data", data), halves("emissive", emissive), tilted];
-    let nearest = Sampler {
-        mag_linear: false,
-        min_linear: false,
-        mipmaps: strata::scene::MipFilter::None,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-    };
+    let nearest = common::scenes::nearest_sampler(Wrap::Repeat);
     let texture = |name: &str, image: usize, srgb: bool| Texture { name: name.into(), image, sampler: nearest, srgb };
     scene.textures = vec![texture("data", 0, false), texture("emissive", 1, true), texture("normal", 2, false)];
     let right = Some(UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) });
@@ -476,8 +470,7 @@ fn minified_textures_read_their_mip_chain_averaged_in_linear_space() {
     scene.images = vec![TextureImage { name: "checker".into(), width: side, height: side, rgba8 }];
     scene.materials[0].base_color_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
     for mipmaps in [MipFilter::Linear, MipFilter::None] {
-        let sampler =
-            Sampler { mag_linear: false, min_linear: false, mipmaps, wrap_s: Wrap::Repeat, wrap_t: Wrap::Repeat };
+        let sampler = Sampler { mipmaps, ..common::scenes::nearest_sampler(Wrap::Repeat) };
         scene.textures = vec![Texture { name: "checker".into(), image: 0, sampler, srgb: true }];
         let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
         let mut albedos = Vec::new();

@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 use strata::scene::settings::RenderSettings;
 use strata::scene::settings::{CameraOverrides, Primary, SamplerKind};
-use strata::scene::Scene;
+use strata::scene::{Scene, UvTransform, Wrap};
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(path)
@@ -236,28 +236,17 @@ fn metallic_roughness_textures_shade_like_their_factors_in_both_modes_and_at_ray
 /// one, must render the showcase exactly as transmission factor 0 does, in both modes.
 #[test]
 fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    use strata::scene::{Sampler, UvTransform, Wrap};
-    let gpu = GpuTest::new();
-    let original = load(&repo("scenes/showcase.toml"));
-    assert!(original.materials.iter().any(|m| m.transmission > 0.0), "the showcase needs glass for this test");
-    let mut textured = original.clone();
-    let nearest = Sampler {
-        mag_linear: false,
-        min_linear: false,
-        mipmaps: strata::scene::MipFilter::None,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-    };
+    let showcase = load(&repo("scenes/showcase.toml"));
+    assert!(showcase.materials.iter().any(|m| m.transmission > 0.0), "the showcase needs glass for this test");
     let right_half = UvTransform { offset: Vec2::new(0.55, 0.0), rotation: 0.0, scale: Vec2::new(0.4, 1.0) };
-    let halves = [[255, 255, 255, 255], [0, 255, 255, 255]];
-    let texture = with_texture(&mut textured, "transmits | does not", &halves, nearest, Some(right_half));
-    let mut factors = original.clone();
-    for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
-        t.transmission_texture = Some(texture);
-        f.transmission = 0.0;
-    }
-    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, "transmission 0");
-    gpu.finish().unwrap();
+    assert_transformed_texture_acts_as_factor(
+        "transmits | does not",
+        &[[255, 255, 255, 255], [0, 255, 255, 255]],
+        right_half,
+        |m, texture| m.transmission_texture = Some(texture),
+        |m| m.transmission = 0.0,
+        "transmission 0",
+    );
 }
 
 /// Specular textures (A scales the factor, KHR_materials_specular) are read, through their KHR_texture_transform,
@@ -266,27 +255,38 @@ fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_
 /// (Without the transform the showcase's UVs reach both texels.)
 #[test]
 fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    use strata::scene::{Sampler, UvTransform, Wrap};
+    // Scale 0 in u: every lookup lands on the right texel, whatever the UVs (the floor's run past 1).
+    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
+    assert_transformed_texture_acts_as_factor(
+        "reflects | does not",
+        &[[255, 255, 255, 255], [255, 255, 255, 0]],
+        right_half,
+        |m, texture| m.specular_texture = Some(texture),
+        |m| m.specular = 0.0,
+        "specular 0",
+    );
+}
+
+/// Gives every showcase material the two-texel texture `texels`, read through `transform` (`use_texture`), and
+/// checks that it renders in both modes exactly as the showcase with `as_factor` applied to every material.
+fn assert_transformed_texture_acts_as_factor(
+    name: &str,
+    texels: &[[u8; 4]],
+    transform: UvTransform,
+    use_texture: impl Fn(&mut strata::scene::Material, strata::scene::TextureRef),
+    as_factor: impl Fn(&mut strata::scene::Material),
+    what: &str,
+) {
     let gpu = GpuTest::new();
     let original = load(&repo("scenes/showcase.toml"));
     let mut textured = original.clone();
-    let nearest = Sampler {
-        mag_linear: false,
-        min_linear: false,
-        mipmaps: strata::scene::MipFilter::None,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-    };
-    // Scale 0 in u: every lookup lands on the right texel, whatever the UVs (the floor's run past 1).
-    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
-    let halves = [[255, 255, 255, 255], [255, 255, 255, 0]];
-    let texture = with_texture(&mut textured, "reflects | does not", &halves, nearest, Some(right_half));
+    let texture = with_texture(&mut textured, name, texels, nearest_sampler(Wrap::Repeat), Some(transform));
     let mut factors = original.clone();
     for (t, f) in textured.materials.iter_mut().zip(&mut factors.materials) {
-        t.specular_texture = Some(texture);
-        f.specular = 0.0;
+        use_texture(t, texture);
+        as_factor(f);
     }
-    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, "specular 0");
+    assert_renders_alike_in_both_modes(&gpu, &textured, &factors, &original, what);
     gpu.finish().unwrap();
 }
 
@@ -296,21 +296,15 @@ fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_r
 /// texels) it does not.
 #[test]
 fn textures_on_the_second_uv_set_read_it_in_both_modes_and_at_ray_hits() {
-    use strata::scene::{MipFilter, Sampler, TextureRef, Wrap};
+    use strata::scene::TextureRef;
     let gpu = GpuTest::new();
     let original = load(&repo("scenes/showcase.toml"));
     let mut on_uv1 = original.clone();
     for p in on_uv1.meshes.iter_mut().flat_map(|m| &mut m.primitives) {
         p.uvs1 = vec![Vec2::new(0.75, 0.5); p.positions.len()];
     }
-    let nearest = Sampler {
-        mag_linear: false,
-        min_linear: false,
-        mipmaps: MipFilter::None,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-    };
-    let texture = with_texture(&mut on_uv1, "black | white", &[[0, 0, 0, 255], [255; 4]], nearest, None);
+    let black_white = [[0, 0, 0, 255], [255; 4]];
+    let texture = with_texture(&mut on_uv1, "black | white", &black_white, nearest_sampler(Wrap::Repeat), None);
     let mut on_uv0 = on_uv1.clone();
     for (uv1, uv0) in on_uv1.materials.iter_mut().zip(&mut on_uv0.materials) {
         uv1.base_color_texture = Some(TextureRef { tex_coord: 1, ..texture });

@@ -7,8 +7,13 @@ use strata::scene::camera::{look_at, Lens};
 #[allow(unused_imports)] // Only the tests that build scenes use it.
 pub use strata::scene::library::place;
 use strata::scene::settings::{RenderSettings, SamplerKind, ToneMap};
-use strata::scene::{Camera, Material, Primitive, Projection, Scene};
+use strata::scene::{Camera, Material, MipFilter, Primitive, Projection, Sampler, Scene, Wrap};
 use strata::vk::Device;
+
+/// Nearest filtering without mipmaps, wrapping as `wrap` says: every lookup returns one texel exactly.
+pub fn nearest_sampler(wrap: Wrap) -> Sampler {
+    Sampler { mag_linear: false, min_linear: false, mipmaps: MipFilter::None, wrap_s: wrap, wrap_t: wrap }
+}
 
 /// A white-ish Lambertian surface without a specular lobe (KHR_materials_specular factor 0), so its radiance is
 /// exactly albedo / π × irradiance.
