@@ -4,6 +4,7 @@ use crate::vk::accel::BUILD_INPUT_USAGE;
 use crate::vk::{Buffer, Device};
 use anyhow::Result;
 use ash::vk;
+use glam::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 pub struct GpuPrimitive {
@@ -57,21 +58,13 @@ impl GpuScene {
                     | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
                 let normals =
                     Buffer::device_local_with_data(device, &format!("{name} normals"), &p.normals, by_address, 16)?;
-                let uv_data = if p.uvs.is_empty() { vec![glam::Vec2::ZERO; p.positions.len()] } else { p.uvs.clone() };
-                let uvs = Buffer::device_local_with_data(device, &format!("{name} uvs"), &uv_data, by_address, 16)?;
-                let uv1_data = if p.uvs1.len() == p.positions.len() { p.uvs1.clone() } else { uv_data };
-                let uvs1 = Buffer::device_local_with_data(device, &format!("{name} uvs1"), &uv1_data, by_address, 16)?;
-                let color_data =
-                    if p.colors.is_empty() { vec![glam::Vec4::ONE; p.positions.len()] } else { p.colors.clone() };
-                let colors =
-                    Buffer::device_local_with_data(device, &format!("{name} colors"), &color_data, by_address, 16)?;
-                let derivative = |name: &str, values: &[glam::Vec3]| {
-                    let data =
-                        if values.is_empty() { vec![glam::Vec3::ZERO; p.positions.len()] } else { values.to_vec() };
-                    Buffer::device_local_with_data(device, name, &data, by_address, 16)
-                };
-                let dpdu = derivative(&format!("{name} dpdu"), &p.dpdu)?;
-                let dpdv = derivative(&format!("{name} dpdv"), &p.dpdv)?;
+                // Streams a mesh may lack are filled for every vertex: zero UVs and derivatives, white colours.
+                let n = p.positions.len();
+                let uvs = vertex_stream(device, &format!("{name} uvs"), &p.uvs, Vec2::ZERO, n, by_address)?;
+                let uvs1 = vertex_stream(device, &format!("{name} uvs1"), p.uvs1_or_uvs(), Vec2::ZERO, n, by_address)?;
+                let colors = vertex_stream(device, &format!("{name} colors"), &p.colors, Vec4::ONE, n, by_address)?;
+                let dpdu = vertex_stream(device, &format!("{name} dpdu"), &p.dpdu, Vec3::ZERO, n, by_address)?;
+                let dpdv = vertex_stream(device, &format!("{name} dpdv"), &p.dpdv, Vec3::ZERO, n, by_address)?;
                 let indices = Buffer::device_local_with_data(
                     device,
                     &format!("{name} indices"),
@@ -96,5 +89,21 @@ impl GpuScene {
             meshes.push(GpuMesh { name: mesh.name.clone(), primitives });
         }
         Ok(Self { meshes })
+    }
+}
+
+/// A device-local vertex stream: `values`, or `fill` for each of `count` vertices where the mesh has none.
+fn vertex_stream<T: bytemuck::Pod>(
+    device: &Arc<Device>,
+    name: &str,
+    values: &[T],
+    fill: T,
+    count: usize,
+    usage: vk::BufferUsageFlags,
+) -> Result<Buffer> {
+    if values.is_empty() {
+        Buffer::device_local_with_data(device, name, &vec![fill; count], usage, 16)
+    } else {
+        Buffer::device_local_with_data(device, name, values, usage, 16)
     }
 }

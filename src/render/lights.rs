@@ -131,13 +131,9 @@ impl LightSet {
                         continue;
                     };
                     let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
-                    let uv = [0, 1, 2].map(|k| primitive.uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
-                    // As uploaded (render::gpu_scene): TEXCOORD_0's values where the mesh has no TEXCOORD_1.
-                    let uv1 = if primitive.uvs1.len() == primitive.positions.len() {
-                        [0, 1, 2].map(|k| primitive.uvs1[tri[k] as usize])
-                    } else {
-                        uv
-                    };
+                    let corners =
+                        |uvs: &[Vec2]| [0, 1, 2].map(|k| uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
+                    let (uv, uv1) = (corners(&primitive.uvs), corners(primitive.uvs1_or_uvs()));
                     let alpha = [0, 1, 2].map(|k| primitive.colors.get(tri[k] as usize).map_or(1.0, |c| c.w));
                     let (e1, e2) = (p1 - p0, p2 - p0);
                     let cross = e1.cross(e2);

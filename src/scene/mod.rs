@@ -52,6 +52,16 @@ impl Primitive {
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
+
+    /// The coordinates textures on the second UV set read: TEXCOORD_1, or TEXCOORD_0 where the mesh has no
+    /// TEXCOORD_1 for every vertex (a material naming a set its mesh lacks reads the first).
+    pub fn uvs1_or_uvs(&self) -> &[Vec2] {
+        if self.uvs1.len() == self.positions.len() {
+            &self.uvs1
+        } else {
+            &self.uvs
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default)]

@@ -198,11 +198,12 @@ impl Image {
             );
         }
         let aspect = if is_depth_format(format) { vk::ImageAspectFlags::DEPTH } else { vk::ImageAspectFlags::COLOR };
+        let mip_levels = mip_levels.clamp(1, full_mip_chain(extent));
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
             .extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })
-            .mip_levels(mip_levels.clamp(1, full_mip_chain(extent)))
+            .mip_levels(mip_levels)
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
@@ -217,7 +218,7 @@ impl Image {
             view: vk::ImageView::null(),
             format,
             extent,
-            mip_levels: mip_levels.clamp(1, full_mip_chain(extent)),
+            mip_levels,
             aspect,
             name: name.to_owned(),
             allocation: None,
