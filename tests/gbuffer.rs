@@ -3,7 +3,7 @@
 //! the thin lens on the position channel; and no NaN or Inf from degenerate geometry.
 mod common;
 
-use common::raycast::{cast, pixel_ray};
+use common::raycast::{cast, point_ray};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec3Swizzles};
 use strata::math::bump::{height_gradient, perturb_normal};
 use strata::math::lens::camera_sample;
@@ -76,7 +76,27 @@ fn each_covered_pixel(frame: &GBufferFrame, mut check: impl FnMut(u32, u32)) {
 
 /// An emissive factor times an sRGB-encoded texel, decoded exactly.
 fn emission_of(factor: Vec3, srgb_texel: [u8; 4]) -> Vec3 {
-    factor * Vec3::from_array([0, 1, 2].map(|i| strata::output::srgb_to_linear(f32::from(srgb_texel[i]) / 255.0)))
+    factor * Vec3::from_array([0, 1, 2].map(|i| srgb_channel(srgb_texel[i])))
+}
+
+fn srgb_channel(code: u8) -> f32 {
+    strata::output::srgb_to_linear(f32::from(code) / 255.0)
+}
+
+/// Asserts that an emission read back is the factor times the sRGB texel: each channel within a quarter of the
+/// gap to the next 8-bit code. GPUs decode sRGB in hardware to about that (an NVIDIA H100 gave 0.50391 for code
+/// 188, exactly 0.50289), which still tells every code apart and sRGB from linear (0.737 for 188).
+fn assert_emission(got: Vec3, factor: Vec3, srgb_texel: [u8; 4], pixel: (u32, u32)) {
+    let want = emission_of(factor, srgb_texel);
+    for i in 0..3 {
+        let code = srgb_texel[i];
+        let gap = srgb_channel(code.saturating_add(1)) - srgb_channel(code.saturating_sub(1));
+        let tolerance = factor[i] * gap / 8.0 + 1e-5;
+        assert!(
+            (got[i] - want[i]).abs() <= tolerance,
+            "{pixel:?}: emission {got}, expected {want} (± {tolerance} in channel {i})"
+        );
+    }
 }
 
 #[test]
@@ -130,12 +150,12 @@ fn sine_bumps_on_a_plane_match_the_closed_form_at_every_pixel() {
     gpu.finish().unwrap();
 }
 
-/// The CPU twin's bumped normal at the surface point seen through pixel (x, y).
-fn twin_normal(scene: &Scene, frame: &GBufferFrame, x: u32, y: u32, bump: &BumpMap) -> Option<Vec3> {
+/// The CPU twin's bumped normal at the surface point seen through a point of the image (pixel centres at +0.5).
+fn twin_normal(scene: &Scene, frame: &GBufferFrame, point: Vec2, bump: &BumpMap) -> Option<Vec3> {
     let cam = scene.camera.as_ref().unwrap();
     let sample = camera_sample(cam, frame.width, frame.height, Vec2::splat(0.5), Vec2::ZERO);
     let transforms: Vec<Mat4> = scene.instances.iter().map(|i| i.world_from_object).collect();
-    let (origin, direction) = pixel_ray(sample.clip_from_world(), x, y, frame.width, frame.height);
+    let (origin, direction) = point_ray(sample.clip_from_world(), point, frame.width, frame.height);
     let hit = cast(scene, &transforms, origin, direction)?;
     let p = hit.primitive;
     let m = hit.world_from_object;
@@ -157,21 +177,39 @@ fn fbm_bumps_on_a_sphere_match_the_cpu_twin() {
     let pass = pass(&gpu);
     let (scene, bump) = fbm_sphere(BumpDerivative::CentralDifferences);
     let frame = render(&gpu, &pass, &scene, (64, 64), Vec2::splat(0.5));
-    let (mut worst, mut checked) = (0.0f32, 0);
+    // Rasterization snaps vertices to the device's sub-pixel grid, which moves where a pixel centre lands on the
+    // surface by up to about one grid step: each pixel may differ from the twin by as much as the twin's own normal
+    // changes over that step, plus the attachment's half-float rounding (2^-12 at 1) and fp32 arithmetic.
+    // lavapipe agrees to ~1e-4 everywhere; an NVIDIA H100 to 3e-5 typically and 1e-3 where the bumps are seen
+    // obliquely.
+    let grid_step = 0.5f32.powi(gpu.device().limits.sub_pixel_precision_bits as i32);
+    let (mut worst_ratio, mut worst, mut checked) = (0.0f32, String::new(), 0);
     for y in (0..frame.height).step_by(2) {
         for x in (0..frame.width).step_by(2) {
             if !frame.covered(x, y) {
                 continue;
             }
-            let Some(want) = twin_normal(&scene, &frame, x, y, &bump) else { continue };
+            let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let Some(want) = twin_normal(&scene, &frame, centre, &bump) else { continue };
+            let shifts = [Vec2::X, Vec2::NEG_X, Vec2::Y, Vec2::NEG_Y].map(|d| centre + d * grid_step);
+            let Some(spread) = shifts.iter().try_fold(0.0f32, |spread, &point| {
+                twin_normal(&scene, &frame, point, &bump).map(|n| spread.max((n - want).abs().max_element()))
+            }) else {
+                continue;
+            };
+            let tolerance = 5e-4 + spread;
             let got = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);
-            worst = worst.max((got - want).abs().max_element());
+            let error = (got - want).abs().max_element();
+            if error / tolerance > worst_ratio {
+                worst_ratio = error / tolerance;
+                worst = format!("({x}, {y}): {got} vs twin {want}, error {error:.2e}, tolerance {tolerance:.2e}");
+            }
             checked += 1;
         }
     }
-    eprintln!("fBm sphere: worst |GPU − twin| normal component {worst:.2e} over {checked} pixels");
+    eprintln!("fBm sphere: {checked} pixels; worst error/tolerance {worst_ratio:.2} at {worst}");
     assert!(checked > 300, "only {checked} pixels checked");
-    assert!(worst < 1e-3, "worst normal component error {worst}");
+    assert!(worst_ratio <= 1.0, "the normal strays from the twin at {worst}");
     drop(pass);
     gpu.finish().unwrap();
 }
@@ -363,14 +401,12 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     m.emissive_texture = Some(TextureRef { texture: 1, tex_coord: 0, transform: None });
     let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
     let (metallic, roughness) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0);
-    let emission = emission_of(Vec3::new(2.0, 1.0, 0.5), emissive);
     each_covered_pixel(&frame, |x, y| {
         // The material attachment holds 8-bit unorm: within half a step.
         let mat = frame.at(MATERIAL, x, y);
         let step = 0.5 / 255.0 + 1e-4;
         assert!((mat[0] - metallic).abs() < step && (mat[1] - roughness).abs() < step, "({x}, {y}): {mat:?}");
-        let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
-        assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+        assert_emission(Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]), Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
     });
     drop(pass);
     gpu.finish().unwrap();
@@ -424,7 +460,6 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
     let frame = render(&gpu, &pass, &scene, (16, 16), Vec2::splat(0.5));
     let (metallic, roughness, transmission) = (0.5 * 51.0 / 255.0, 0.8 * 153.0 / 255.0, 0.6 * 128.0 / 255.0);
     let specular = 0.7 * 64.0 / 255.0;
-    let emission = emission_of(Vec3::new(2.0, 1.0, 0.5), emissive);
     // A quarter turn (KHR_texture_transform's rotation) makes ∂p/∂u' = ∂p/∂v: the texel's +x tilt follows ∂p/∂v.
     let n = Vec3::Y;
     let expected_normal = (dpdv - n * n.dot(dpdv)).normalize();
@@ -437,8 +472,7 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
                 && (mat[2] - transmission).abs() < step,
             "({x}, {y}): material {mat:?}"
         );
-        let got = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
-        assert!((got - emission).abs().max_element() < 2e-3 * emission.max_element(), "({x}, {y}): {got}");
+        assert_emission(Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]), Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
         let got = frame.at(GEOMETRIC_NORMAL, x, y)[3];
         assert!((got - specular).abs() < 1e-3, "({x}, {y}): specular {got}, expected {specular}");
         let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);

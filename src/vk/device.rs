@@ -223,6 +223,9 @@ pub struct DeviceLimits {
     pub max_image_dimension_2d: u32,
     pub timestamp_period_ns: f32,
     pub min_storage_buffer_offset_alignment: u64,
+    /// Rasterization snaps vertices to 1/2^bits of a pixel (Vulkan spec, "Rasterization"): what a CPU twin of
+    /// the raster pass can expect to agree to.
+    pub sub_pixel_precision_bits: u32,
 }
 
 /// The logical device and everything bound to its lifetime. Resources hold an `Arc<Device>`; it is destroyed
@@ -261,6 +264,7 @@ impl Device {
             max_image_dimension_2d: props.limits.max_image_dimension2_d,
             timestamp_period_ns: props.limits.timestamp_period,
             min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
+            sub_pixel_precision_bits: props.limits.sub_pixel_precision_bits,
         };
 
         let priorities = [1.0f32];

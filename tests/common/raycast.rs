@@ -56,8 +56,13 @@ pub fn cast<'a>(scene: &'a Scene, transforms: &[Mat4], origin: Vec3, direction: 
 
 /// The world-space ray through the centre of pixel (x, y) for `clip_from_world` on a `width`×`height` image.
 pub fn pixel_ray(clip_from_world: Mat4, x: u32, y: u32, width: u32, height: u32) -> (Vec3, Vec3) {
+    point_ray(clip_from_world, Vec2::new(x as f32 + 0.5, y as f32 + 0.5), width, height)
+}
+
+/// The ray through a point of the image, in pixels from its top-left corner (pixel centres at +0.5).
+pub fn point_ray(clip_from_world: Mat4, point: Vec2, width: u32, height: u32) -> (Vec3, Vec3) {
     let world_from_clip = clip_from_world.inverse();
-    let ndc = Vec2::new((x as f32 + 0.5) / width as f32, (y as f32 + 0.5) / height as f32) * 2.0 - Vec2::ONE;
+    let ndc = point / Vec2::new(width as f32, height as f32) * 2.0 - Vec2::ONE;
     let near = world_from_clip.project_point3(ndc.extend(0.0));
     let far = world_from_clip.project_point3(ndc.extend(0.5));
     (near, (far - near).normalize())
