@@ -341,6 +341,7 @@ fn render(args: RenderArgs) -> Result<()> {
         validation: args.gpu.validate,
         echo_messages: args.gpu.validate,
         device: args.gpu.device.clone(),
+        ..Default::default()
     })?;
     let log = gpu.validation_log();
     // Geometry and textures go up once for every pass of this render.
@@ -541,6 +542,7 @@ fn bench(args: BenchArgs) -> Result<()> {
             validation: args.validate,
             echo_messages: args.validate,
             device: args.device.clone(),
+            ..Default::default()
         })?;
         let log = gpu.validation_log();
         benchmark(&args, gpu)?;
@@ -783,7 +785,7 @@ fn info(args: InfoArgs) -> Result<()> {
         print_stdout(&text);
         bail!("no Vulkan devices found; run scripts/setup.sh to install Mesa's lavapipe");
     }
-    let chosen = strata::vk::device::select_device(&reports, None).ok();
+    let chosen = strata::vk::device::select_device(&reports, None, strata::vk::DeviceNeeds::RayQueries).ok();
     out!("Devices:");
     for r in &reports {
         let marker = if Some(r.index) == chosen { " (default)" } else { "" };

@@ -101,7 +101,7 @@ fn assert_emission(got: Vec3, factor: Vec3, srgb_texel: [u8; 4], pixel: (u32, u3
 
 #[test]
 fn sine_bumps_on_a_plane_match_the_closed_form_at_every_pixel() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let (amplitude, frequency) = (0.05f32, 1.5f32);
     let bump = BumpMap {
@@ -173,7 +173,7 @@ fn fbm_sphere(derivative: BumpDerivative) -> (Scene, BumpMap) {
 
 #[test]
 fn fbm_bumps_on_a_sphere_match_the_cpu_twin() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let (scene, bump) = fbm_sphere(BumpDerivative::CentralDifferences);
     let frame = render(&gpu, &pass, &scene, (64, 64), Vec2::splat(0.5));
@@ -216,7 +216,7 @@ fn fbm_bumps_on_a_sphere_match_the_cpu_twin() {
 
 #[test]
 fn central_differences_stay_within_their_derived_bound_of_the_analytic_gradient() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let (central_scene, bump) = fbm_sphere(BumpDerivative::CentralDifferences);
     let (analytic_scene, _) = fbm_sphere(BumpDerivative::Analytic);
@@ -260,7 +260,7 @@ fn central_differences_stay_within_their_derived_bound_of_the_analytic_gradient(
 
 #[test]
 fn thin_lens_keeps_the_focus_plane_and_shifts_other_depths_by_the_prediction() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let (aperture, focus) = (0.2f32, 4.0f32);
     // The camera looks down −Z from the origin; a large plane faces it at depth d.
@@ -294,7 +294,7 @@ fn thin_lens_keeps_the_focus_plane_and_shifts_other_depths_by_the_prediction() {
 
 #[test]
 fn degenerate_uvs_and_zero_area_triangles_give_no_nan_or_inf() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let bump = BumpMap { kind: NoiseKind::Fbm, amplitude: 0.1, ..Default::default() };
     let mut p = plane(Vec2::splat(2.0), Vec2::ONE, None);
@@ -328,7 +328,7 @@ fn degenerate_uvs_and_zero_area_triangles_give_no_nan_or_inf() {
 #[test]
 fn normal_textures_tilt_the_normal_and_the_bump_composes_on_top() {
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     // One texel: tangent-space (2·200/255 − 1, 2·128/255 − 1, 2·220/255 − 1), stored linear (it is data).
     let texel = [200u8, 128, 220, 255];
@@ -380,7 +380,7 @@ fn normal_textures_tilt_the_normal_and_the_bump_composes_on_top() {
 fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = GBufferPass::new(gpu.device(), 2).unwrap();
     // Roughness in G, metalness in B, stored linear (glTF 2.0 §3.9.2); the emissive texel is sRGB colour.
     let metal_rough = [0u8, 153, 51, 255];
@@ -421,7 +421,7 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
 fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textures_scale_their_factors() {
     use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL};
     use strata::scene::{Texture, TextureImage, TextureRef, UvTransform, Wrap};
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = GBufferPass::new(gpu.device(), 3).unwrap();
     let white = [255u8; 4];
     // Right texels: roughness in G, metalness in B, transmission in R, specular in A (linear); the emissive one
@@ -490,7 +490,7 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
 fn minified_textures_read_their_mip_chain_averaged_in_linear_space() {
     use strata::render::gbuffer_layout::ALBEDO;
     use strata::scene::{MipFilter, Sampler, Texture, TextureImage, TextureRef, Wrap};
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let pass = pass(&gpu);
     let side = 256u32;
     let rgba8: Vec<u8> = (0..side * side)

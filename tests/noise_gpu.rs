@@ -8,7 +8,7 @@ use strata::render::noise_probe::NoiseProbe;
 
 #[test]
 fn gpu_noise_equals_the_rust_twin_at_100k_points() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let probe = NoiseProbe::new(gpu.device()).unwrap();
     // A deterministic scatter over many lattice cells, negative coordinates included.
     let points: Vec<Vec3> = (0..100_000u32)

@@ -107,7 +107,7 @@ fn check(gpu: &common::GpuTest, path: &Path, min_agreement: f32) {
 
 #[test]
 fn every_project_scene_matches_the_cpu_twin() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     for (name, _) in strata::scene::library::all() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.toml"));
         check(&gpu, &path, 0.97);
@@ -122,7 +122,7 @@ fn textured_and_vertex_coloured_samples_match_the_cpu_twin() {
         eprintln!("shared samples absent: not run");
         return;
     }
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     // Filtering differs from the twin's nearest lookup at texture edges: a few per cent of pixels.
     for (file, min) in
         [("BoxTextured.gltf", 0.93), ("TextureCoordinateTest.gltf", 0.93), ("BoxVertexColors.gltf", 0.97)]

@@ -21,7 +21,7 @@ struct Push {
 
 #[test]
 fn gpu_samplers_equal_the_rust_twin() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::raster_only();
     let device = gpu.device();
     let pipeline = Pipeline::compute(
         device,

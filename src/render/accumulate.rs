@@ -44,6 +44,7 @@ impl AccumulatePass {
     /// `alpha_tested`: some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is
     /// forced opaque and the pipeline carries no alpha test.
     pub fn new(device: &Arc<Device>, texture_count: u32, primary_rays: bool, alpha_tested: bool) -> Result<Self> {
+        device.require_ray_queries("the accumulation pass")?;
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
             Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: 6 },

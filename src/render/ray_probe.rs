@@ -57,6 +57,7 @@ pub struct RayProbe {
 
 impl RayProbe {
     pub fn new(device: &Arc<Device>) -> Result<Self> {
+        device.require_ray_queries("the ray probe")?;
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
             Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),

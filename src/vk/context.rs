@@ -1,5 +1,5 @@
 //! A ready-to-use GPU: instance (with validation when asked) and the selected device.
-use super::device::Device;
+use super::device::{Device, DeviceNeeds};
 use super::instance::{Instance, InstanceOptions};
 use super::validation::ValidationLog;
 use anyhow::Result;
@@ -13,6 +13,8 @@ pub struct GpuOptions {
     pub echo_messages: bool,
     /// `--device NAME|INDEX`.
     pub device: Option<String>,
+    /// Ray queries, unless the caller only rasterizes and runs compute shaders that trace no rays.
+    pub needs: DeviceNeeds,
 }
 
 /// The instance and device; clone the `Arc<Device>` to create resources.
@@ -26,7 +28,7 @@ impl Gpu {
         let instance =
             Instance::new(&InstanceOptions { validation: options.validation, echo_messages: options.echo_messages })?;
         let log = instance.validation_log();
-        let device = Device::new(instance, options.device.as_deref())?;
+        let device = Device::new(instance, options.device.as_deref(), options.needs)?;
         Ok(Self { device, log })
     }
 

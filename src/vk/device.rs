@@ -1,5 +1,5 @@
-//! Physical device selection (ray queries required; discrete, then integrated, then CPU) and the logical device
-//! that owns the queue, the allocator and the extension loaders.
+//! Physical device selection (ray queries required for rendering; discrete, then integrated, then CPU) and the
+//! logical device that owns the queue, the allocator and the extension loaders.
 use super::instance::{version_string, Instance, API_VERSION};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
@@ -12,6 +12,21 @@ use std::sync::{Arc, Mutex, MutexGuard};
 /// `VK_KHR_acceleration_structure` (Vulkan spec, extension dependencies).
 pub const REQUIRED_EXTENSIONS: [&CStr; 3] =
     [ash::khr::acceleration_structure::NAME, ash::khr::ray_query::NAME, ash::khr::deferred_host_operations::NAME];
+
+/// What a device is asked for. Rendering traces rays with ray queries; the raster pass and the compute shaders
+/// that trace none (the noise and sampler probes) do not, so their tests also run on GPUs without
+/// `VK_KHR_ray_query` (an NVIDIA H100 has acceleration structures and ray-tracing pipelines but no ray queries).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DeviceNeeds {
+    #[default]
+    RayQueries,
+    RasterOnly,
+}
+
+/// Whether a `DeviceReport::missing` entry is about ray queries alone.
+fn about_ray_queries(missing: &str) -> bool {
+    missing.as_bytes() == ash::khr::ray_query::NAME.to_bytes() || missing == "feature rayQuery"
+}
 
 /// One physical device as `strata info` and device selection see it.
 #[derive(Debug, Clone)]
@@ -30,8 +45,16 @@ pub struct DeviceReport {
 }
 
 impl DeviceReport {
+    /// Whether strata can render on it.
     pub fn qualifies(&self) -> bool {
-        self.missing.is_empty()
+        self.qualifies_for(DeviceNeeds::RayQueries)
+    }
+
+    pub fn qualifies_for(&self, needs: DeviceNeeds) -> bool {
+        match needs {
+            DeviceNeeds::RayQueries => self.missing.is_empty(),
+            DeviceNeeds::RasterOnly => self.missing.iter().all(|m| about_ray_queries(m)),
+        }
     }
 
     pub fn type_name(&self) -> &'static str {
@@ -163,8 +186,8 @@ fn queue_family_index(instance: &Instance, handle: vk::PhysicalDevice) -> Option
 }
 
 /// Picks a device: the one `selector` names (an index, or a case-insensitive part of the name), else the most
-/// preferred qualifying one. Errors list every device and what it lacks.
-pub fn select_device(reports: &[DeviceReport], selector: Option<&str>) -> Result<usize> {
+/// preferred one that qualifies for `needs`. Errors list every device and what it lacks.
+pub fn select_device(reports: &[DeviceReport], selector: Option<&str>, needs: DeviceNeeds) -> Result<usize> {
     let listing = || {
         let mut s = String::new();
         for r in reports {
@@ -200,20 +223,27 @@ pub fn select_device(reports: &[DeviceReport], selector: Option<&str>) -> Result
                 listing()
             ),
         };
-        if !report.qualifies() {
+        if !report.qualifies_for(needs) {
             bail!("device [{}] {} cannot run strata; the devices are:{}", report.index, report.name, listing());
         }
         return Ok(report.index);
     }
-    reports.iter().filter(|r| r.qualifies()).min_by_key(|r| (r.preference(), r.index)).map(|r| r.index).ok_or_else(
-        || {
+    let what = match needs {
+        DeviceNeeds::RayQueries => "Vulkan 1.3 with ray queries",
+        DeviceNeeds::RasterOnly => "Vulkan 1.3 with acceleration structures",
+    };
+    reports
+        .iter()
+        .filter(|r| r.qualifies_for(needs))
+        .min_by_key(|r| (r.preference(), r.index))
+        .map(|r| r.index)
+        .ok_or_else(|| {
             anyhow!(
-                "no Vulkan device supports what strata needs (Vulkan 1.3 with ray queries); \
+                "no Vulkan device supports what strata needs ({what}); \
                  run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query; the devices are:{}",
                 listing()
             )
-        },
-    )
+        })
 }
 
 /// Limits strata reads often.
@@ -245,10 +275,11 @@ pub struct Device {
 }
 
 impl Device {
-    /// Creates the logical device on the selected physical device with every feature strata needs.
-    pub fn new(instance: Arc<Instance>, selector: Option<&str>) -> Result<Arc<Self>> {
+    /// Creates the logical device on the selected physical device with every feature strata needs (ray queries
+    /// only where the device has them, when `needs` is `RasterOnly`).
+    pub fn new(instance: Arc<Instance>, selector: Option<&str>, needs: DeviceNeeds) -> Result<Arc<Self>> {
         let reports = enumerate_devices(&instance)?;
-        let index = select_device(&reports, selector)?;
+        let index = select_device(&reports, selector, needs)?;
         let report = reports[index].clone();
         let physical = report.handle;
         let queue_family = queue_family_index(&instance, physical)
@@ -270,7 +301,12 @@ impl Device {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let extensions: Vec<*const std::ffi::c_char> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        let ray_queries = report.ray_query;
+        let extensions: Vec<*const std::ffi::c_char> = REQUIRED_EXTENSIONS
+            .iter()
+            .filter(|e| ray_queries || **e != ash::khr::ray_query::NAME)
+            .map(|e| e.as_ptr())
+            .collect();
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(true)
             .scalar_block_layout(true)
@@ -291,8 +327,10 @@ impl Device {
             .features(base_features)
             .push_next(&mut v12)
             .push_next(&mut v13)
-            .push_next(&mut accel)
-            .push_next(&mut rq);
+            .push_next(&mut accel);
+        if ray_queries {
+            features = features.push_next(&mut rq);
+        }
         let create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
             .enabled_extension_names(&extensions)
@@ -350,6 +388,14 @@ impl Device {
         Ok(device)
     }
 
+    /// Fails, naming `what` and the device, where the device was created without ray queries (`RasterOnly`).
+    pub fn require_ray_queries(&self, what: &str) -> Result<()> {
+        if !self.report.ray_query {
+            bail!("{what} traces rays with VK_KHR_ray_query, which {} lacks", self.report.name);
+        }
+        Ok(())
+    }
+
     /// Gives a Vulkan object a debug-utils name (what validation messages and RenderDoc show).
     pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         let Some(debug_utils) = &self.debug_utils else { return };
@@ -384,5 +430,50 @@ impl Drop for Device {
             ManuallyDrop::drop(self.allocator.get_mut().unwrap_or_else(|p| p.into_inner()));
             self.raw.destroy_device(None);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(index: usize, device_type: vk::PhysicalDeviceType, missing: &[&str]) -> DeviceReport {
+        DeviceReport {
+            index,
+            name: format!("device {index}"),
+            device_type,
+            api_version: API_VERSION,
+            driver_name: String::new(),
+            driver_info: String::new(),
+            ray_query: !missing.iter().any(|m| about_ray_queries(m)),
+            missing: missing.iter().map(|m| m.to_string()).collect(),
+            handle: vk::PhysicalDevice::null(),
+        }
+    }
+
+    #[test]
+    fn raster_only_devices_may_lack_ray_queries_and_nothing_else() {
+        let no_ray_query = report(0, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query"]);
+        let no_feature = report(1, vk::PhysicalDeviceType::DISCRETE_GPU, &["feature rayQuery"]);
+        let too_old =
+            report(2, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query", "feature dynamicRendering"]);
+        let cpu = report(3, vk::PhysicalDeviceType::CPU, &[]);
+        for r in [&no_ray_query, &no_feature] {
+            assert!(!r.qualifies() && r.qualifies_for(DeviceNeeds::RasterOnly), "{r:?}");
+        }
+        assert!(!too_old.qualifies_for(DeviceNeeds::RasterOnly));
+        assert!(cpu.qualifies() && cpu.qualifies_for(DeviceNeeds::RasterOnly));
+
+        // Rendering takes the CPU device with ray queries; raster-only work prefers the discrete GPU without.
+        let reports = [no_ray_query, too_old, cpu];
+        assert_eq!(select_device(&reports, None, DeviceNeeds::RayQueries).unwrap(), 3);
+        assert_eq!(select_device(&reports, None, DeviceNeeds::RasterOnly).unwrap(), 0);
+        let err = select_device(&reports, Some("0"), DeviceNeeds::RayQueries).unwrap_err().to_string();
+        assert!(
+            err.contains("device [0] device 0 cannot run strata") && err.contains("lacks VK_KHR_ray_query"),
+            "{err}"
+        );
+        let err = select_device(&reports[..2], None, DeviceNeeds::RayQueries).unwrap_err().to_string();
+        assert!(err.contains("Vulkan 1.3 with ray queries"), "{err}");
     }
 }

@@ -13,5 +13,5 @@ pub mod timer;
 pub mod validation;
 
 pub use context::{Gpu, GpuOptions};
-pub use device::Device;
+pub use device::{Device, DeviceNeeds};
 pub use memory::{Buffer, Image, MemoryLocation};

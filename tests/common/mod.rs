@@ -10,7 +10,7 @@ pub mod scenes;
 
 use std::sync::Arc;
 use strata::vk::validation::ValidationLog;
-use strata::vk::{Device, Gpu, GpuOptions};
+use strata::vk::{Device, DeviceNeeds, Gpu, GpuOptions};
 
 pub struct GpuTest {
     gpu: Option<Gpu>,
@@ -18,9 +18,24 @@ pub struct GpuTest {
 }
 
 impl GpuTest {
+    /// A device with ray queries, for tests that trace rays.
     pub fn new() -> Self {
-        let options =
-            GpuOptions { validation: true, echo_messages: false, device: std::env::var("STRATA_TEST_DEVICE").ok() };
+        Self::with(DeviceNeeds::RayQueries)
+    }
+
+    /// A device that need not have ray queries, for tests that only rasterize or run compute shaders that trace
+    /// no rays: they also run on GPUs without VK_KHR_ray_query.
+    pub fn raster_only() -> Self {
+        Self::with(DeviceNeeds::RasterOnly)
+    }
+
+    fn with(needs: DeviceNeeds) -> Self {
+        let options = GpuOptions {
+            validation: true,
+            echo_messages: false,
+            device: std::env::var("STRATA_TEST_DEVICE").ok(),
+            needs,
+        };
         match Gpu::new(&options) {
             Ok(gpu) => {
                 let log = gpu.validation_log();
