@@ -263,10 +263,11 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     return s;
 }
 
-// The surface a ray query committed to, from the primitive's vertex streams. `visible` (a primary ray of the
-// reference mode) evaluates it as the G-buffer pass does (gbuffer.frag): vertex colour, normal texture, Blinn
-// bump and double-sided faces turned to the viewer, so both modes agree. Deeper hits skip that detail: it costs
-// more than it shows after a gloss or translucency bounce.
+// The surface a ray query committed to, from the primitive's vertex streams, evaluated as the G-buffer pass does
+// (gbuffer.frag): vertex colour, normal texture and Blinn bump, so a surface looks the same seen directly, in a
+// mirror or through glass. `visible` (a primary ray of the reference mode) also turns double-sided faces to the
+// viewer, as the raster pass does; deeper hits keep their side, so a ray inside a double-sided transmissive mesh
+// still knows it is inside.
 Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     TriangleHit h = triangle_hit(
         rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true),
@@ -294,12 +295,11 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
 
     GpuMaterial m = materials[h.r.material];
     vec2 uv1 = any_texture_reads_uv1(m) ? hit_uv1(h) : uv;
-    vec4 base = m.base_color;
-    if (visible) base *= hit_color(h);
+    vec4 base = m.base_color * hit_color(h);
     if (m.base_color_texture >= 0) {
         base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1), 0.0);
     }
-    if (visible) {
+    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
         Vec3Array dpdus = Vec3Array(h.r.dpdu);
         Vec3Array dpdvs = Vec3Array(h.r.dpdv);
@@ -315,11 +315,11 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         }
         if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_height_and_gradient(m.bump, uv).yz);
         s.normal = n;
-        // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
-        if (m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
-            s.normal = -s.normal;
-            s.geometric = -s.geometric;
-        }
+    }
+    // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
+    if (visible && m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
     }
     s.emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) {
