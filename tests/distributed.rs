@@ -634,22 +634,42 @@ fn direct_light_is_linear_in_metalness() {
     gpu.finish().unwrap();
 }
 
-/// A Lambertian ceiling at y = 2 facing down, 4 m square, with sine bumps across x (period 0.5 m, slopes up to
-/// 0.2) and a vertex colour, lit from the side by a point light at z = 0; seen either in a mirror at y = 0 by a
-/// camera looking down from y = 1, or directly by a camera at y = 0 looking up. Both cameras are orthographic and
-/// see the same 2 m square of ceiling, image x along world x; the mirror turns image y from +z to −z, which the
-/// scene's symmetry in z makes no difference to, sample for sample.
-fn mirrored_ceiling(through_mirror: bool) -> Scene {
-    use strata::scene::{BumpDerivative, BumpMap, NoiseKind};
+/// What tilts the mirrored ceiling's normal into stripes across x.
+#[derive(Clone, Copy, Debug)]
+enum CeilingDetail {
+    /// Sine bumps, period 0.5 m, slopes up to 0.2.
+    Bump,
+    /// A 16×1 normal texture of alternating texels tilted ±30° about z, linearly filtered: period 0.5 m.
+    NormalTexture,
+}
+
+/// A Lambertian ceiling at y = 2 facing down, 4 m square, with `detail` and a vertex colour, lit from the side by a
+/// point light at z = 0; seen either in a mirror at y = 0 by a camera looking down from y = 1, or directly by a
+/// camera at y = 0 looking up. Both cameras are orthographic and see the same 2 m square of ceiling, image x along
+/// world x; the mirror turns image y from +z to −z, which the scene's symmetry in z makes no difference to, sample
+/// for sample.
+fn mirrored_ceiling(detail: CeilingDetail, through_mirror: bool) -> Scene {
+    use strata::scene::{BumpDerivative, BumpMap, NoiseKind, Sampler, Texture, TextureImage, TextureRef};
     let mut scene = Scene::default();
     let ceiling = lambertian(&mut scene, 0.8);
-    scene.materials[ceiling].bump = Some(BumpMap {
-        kind: NoiseKind::Sine,
-        amplitude: 0.016,
-        frequency: 8.0,
-        derivative: BumpDerivative::Analytic,
-        ..Default::default()
-    });
+    match detail {
+        CeilingDetail::Bump => {
+            scene.materials[ceiling].bump = Some(BumpMap {
+                kind: NoiseKind::Sine,
+                amplitude: 0.016,
+                frequency: 8.0,
+                derivative: BumpDerivative::Analytic,
+                ..Default::default()
+            })
+        }
+        CeilingDetail::NormalTexture => {
+            // Tangent-space (±sin 30°, 0, cos 30°), encoded as (n + 1) / 2 (glTF 2.0 §3.9.3).
+            let rgba8 = (0..16).flat_map(|i| if i % 2 == 0 { [191u8, 128, 238, 255] } else { [64, 128, 238, 255] });
+            scene.images = vec![TextureImage { name: "tilts".into(), width: 16, height: 1, rgba8: rgba8.collect() }];
+            scene.textures = vec![Texture { name: "tilts".into(), image: 0, sampler: Sampler::default(), srgb: false }];
+            scene.materials[ceiling].normal_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
+        }
+    }
     let (mut p, m) = plane_at(Vec2::splat(4.0), Vec3::new(0.0, 2.0, 0.0), true, ceiling);
     p.colors = vec![glam::Vec4::new(1.0, 0.5, 0.25, 1.0); p.positions.len()];
     place(&mut scene, "ceiling", p, m);
@@ -678,19 +698,29 @@ fn mirrored_ceiling(through_mirror: bool) -> Scene {
 }
 
 /// Gloss rays shade what they hit as the raster pass shades what the camera sees: a white mirror (metal,
-/// roughness 0: F = 1) shows a bump-mapped, vertex-coloured surface as a direct view of it does, pixel for pixel.
+/// roughness 0: F = 1) shows a bump-mapped or normal-textured, vertex-coloured surface as a direct view of it does,
+/// pixel for pixel.
 #[test]
-fn a_mirror_shows_bumps_and_vertex_colours_as_a_direct_view_does() {
+fn a_mirror_shows_bumps_normal_textures_and_vertex_colours_as_a_direct_view_does() {
     let gpu = GpuTest::new();
+    for detail in [CeilingDetail::Bump, CeilingDetail::NormalTexture] {
+        mirror_matches_direct_view(&gpu, detail);
+    }
+    gpu.finish().unwrap();
+}
+
+fn mirror_matches_direct_view(gpu: &GpuTest, detail: CeilingDetail) {
     let (width, height) = (64u32, 64u32);
     let s = settings(width, height, 16, SamplerKind::Jittered);
-    let direct = render(gpu.device(), &mirrored_ceiling(false), &s).linear;
-    let mirrored = render(gpu.device(), &mirrored_ceiling(true), &s).linear;
-    // The bumps make stripes in the direct view (without them the ceiling would shade smoothly).
+    let direct = render(gpu.device(), &mirrored_ceiling(detail, false), &s).linear;
+    let mirrored = render(gpu.device(), &mirrored_ceiling(detail, true), &s).linear;
+    // The detail makes stripes in the direct view (without it the ceiling would shade smoothly); `steepest` is their
+    // largest change across one pixel, in mean pixels.
     let profile: Vec<f32> = (0..width).map(|x| (0..height).map(|y| direct.pixel(x, y)[0]).sum::<f32>()).collect();
     let (lo, hi) = profile.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let mean = profile.iter().sum::<f32>() / width as f32;
-    assert!((hi - lo) / mean > 0.3, "the direct view shows no stripes: {profile:?}");
+    assert!((hi - lo) / mean > 0.3, "{detail:?}: the direct view shows no stripes: {profile:?}");
+    let steepest = profile.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0f32, f32::max) / mean;
     // Each mirror pixel against the same pixel seen directly, in units of the mean pixel's red.
     let unit = mean / height as f32;
     let (mut errors, mut lit) = (Vec::new(), 0);
@@ -698,23 +728,26 @@ fn a_mirror_shows_bumps_and_vertex_colours_as_a_direct_view_does() {
         for x in 0..width {
             let (d, m) = (direct.pixel(x, y), mirrored.pixel(x, y));
             errors.push((0..3).map(|c| (m[c] - d[c]).abs() / unit).fold(0.0f32, f32::max));
-            // The vertex colour tints what the mirror shows.
-            if m[0] > 0.01 * unit {
+            // The vertex colour tints what the mirror shows. Pixels under a tenth of the mean are left out: there the
+            // mirror's own glint of the point light (its GGX tail, white, a few 10⁻⁶) shows in the ratios.
+            if m[0] > 0.1 * unit {
                 lit += 1;
-                assert!((m[1] / m[0] - 0.5).abs() < 1e-3 && (m[2] / m[0] - 0.25).abs() < 1e-3, "({x}, {y}): {m:?}");
+                let tint_kept = (m[1] / m[0] - 0.5).abs() < 1e-3 && (m[2] / m[0] - 0.25).abs() < 1e-3;
+                assert!(tint_kept, "{detail:?} ({x}, {y}): {m:?}");
             }
         }
     }
-    assert!(lit > 4000, "only {lit} lit pixels");
+    assert!(lit > (width * height / 2) as usize, "{detail:?}: only {lit} lit pixels");
     errors.sort_by(f32::total_cmp);
     let (median, p99, worst) = (errors[errors.len() / 2], errors[errors.len() * 99 / 100], errors[errors.len() - 1]);
-    eprintln!("mirror vs direct view, in mean pixels: median {median:.4}, 99th percentile {p99:.4}, worst {worst:.4}");
-    // Roughness 0 is GGX with α = 10⁻³ (ggx_alpha): its core moves a reflected hit by about a tenth of a pixel,
-    // some 0.4% of a mean pixel where the stripes are steepest, and its tails now and then send a sample pixels
-    // aside (3% at the 99th percentile). Without the bumps at the mirror's hits the stripes (±40%) would be gone.
+    eprintln!("{detail:?}: mirror vs direct view, in mean pixels: median {median:.4}, 99th percentile {p99:.4}, worst {worst:.4}");
+    // Roughness 0 is GGX with α = 10⁻³ (ggx_alpha): its core moves a reflected hit by a fraction of a pixel and its
+    // tails now and then send a sample pixels aside, so the images part where the stripes are steep. Measured, for
+    // both details: the steepest step times 0.013 px at the median, 0.09 px at the 99th percentile. Without the
+    // detail at the mirror's hits the stripes would be gone, errors of the order of their whole swing.
     assert!(
-        median < 0.01 && p99 < 0.06,
-        "the mirror's image strays from the direct view: median {median}, 99th percentile {p99}"
+        median < 0.03 * steepest && p99 < 0.15 * steepest,
+        "{detail:?}: the mirror's image strays from the direct view: median {median}, 99th percentile {p99}, \
+         steepest step {steepest}"
     );
-    gpu.finish().unwrap();
 }
