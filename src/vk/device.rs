@@ -23,9 +23,12 @@ pub enum DeviceNeeds {
     RasterOnly,
 }
 
+/// The `DeviceReport::missing` entry of a device that has VK_KHR_ray_query but not its feature.
+const RAY_QUERY_FEATURE: &str = "feature rayQuery";
+
 /// Whether a `DeviceReport::missing` entry is about ray queries alone.
 fn about_ray_queries(missing: &str) -> bool {
-    missing.as_bytes() == ash::khr::ray_query::NAME.to_bytes() || missing == "feature rayQuery"
+    missing.as_bytes() == ash::khr::ray_query::NAME.to_bytes() || missing == RAY_QUERY_FEATURE
 }
 
 /// One physical device as `strata info` and device selection see it.
@@ -145,7 +148,7 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
             // SPIR-V 1.6 compute shaders declare their size with LocalSizeId (VUID-RuntimeSpirv-LocalSizeId-06434).
             (v13.maintenance4, "feature maintenance4"),
             (accel.acceleration_structure, "feature accelerationStructure"),
-            (rq.ray_query, "feature rayQuery"),
+            (rq.ray_query, RAY_QUERY_FEATURE),
         ];
         for (value, label) in checks {
             if value == vk::FALSE && !missing.iter().any(|m| label.ends_with(m.as_str())) {
@@ -155,7 +158,7 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         ray_query = rq.ray_query == vk::TRUE;
         // The extension names already say what is missing when the extension itself is absent.
         if !has(ash::khr::ray_query::NAME) {
-            missing.retain(|m| m != "feature rayQuery");
+            missing.retain(|m| m != RAY_QUERY_FEATURE);
         }
         if !has(ash::khr::acceleration_structure::NAME) {
             missing.retain(|m| m != "feature accelerationStructure");
@@ -454,7 +457,7 @@ mod tests {
     #[test]
     fn raster_only_devices_may_lack_ray_queries_and_nothing_else() {
         let no_ray_query = report(0, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query"]);
-        let no_feature = report(1, vk::PhysicalDeviceType::DISCRETE_GPU, &["feature rayQuery"]);
+        let no_feature = report(1, vk::PhysicalDeviceType::DISCRETE_GPU, &[RAY_QUERY_FEATURE]);
         let too_old =
             report(2, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query", "feature dynamicRendering"]);
         let cpu = report(3, vk::PhysicalDeviceType::CPU, &[]);
