@@ -7,6 +7,27 @@ use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 pub use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
+/// Memory for one resource, named like it. `linear`: a buffer or linear-tiling image, which gpu-allocator keeps
+/// apart from optimal-tiling images as the spec's bufferImageGranularity asks ("Buffer-Image Granularity").
+fn allocate(
+    device: &Device,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> Result<Allocation> {
+    device
+        .allocator()
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+        .map_err(|e| anyhow!(e))
+}
+
 /// A buffer with its memory. `address` is its device address when created with `SHADER_DEVICE_ADDRESS`.
 pub struct Buffer {
     pub raw: vk::Buffer,
@@ -39,16 +60,7 @@ impl Buffer {
         requirements.alignment = requirements.alignment.max(alignment.max(1));
         let mut buffer =
             Self { raw, size, address: 0, name: name.to_owned(), allocation: None, device: device.clone() };
-        let allocation = device
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| anyhow!(e))
+        let allocation = allocate(device, name, requirements, location, true)
             .with_context(|| format!("allocating {size} bytes for buffer \"{name}\""))?;
         unsafe { device.raw.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
             .with_context(|| format!("vkBindBufferMemory \"{name}\""))?;
@@ -225,16 +237,7 @@ impl Image {
             device: device.clone(),
         };
         let requirements = unsafe { device.raw.get_image_memory_requirements(raw) };
-        let allocation = device
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| anyhow!(e))
+        let allocation = allocate(device, name, requirements, MemoryLocation::GpuOnly, false)
             .with_context(|| format!("allocating memory for image \"{name}\""))?;
         unsafe { device.raw.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
             .with_context(|| format!("vkBindImageMemory \"{name}\""))?;
