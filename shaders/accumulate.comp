@@ -28,8 +28,8 @@ layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
 layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
-// position, shading normal, geometric normal, albedo, material, emission (gbuffer_layout.glsl).
-layout(set = 0, binding = 1) uniform sampler2D gbuffer[6];
+// position, shading normal, geometric normal, albedo, material, emission, specular colour (gbuffer_layout.rs).
+layout(set = 0, binding = 1) uniform sampler2D gbuffer[7];
 layout(set = 0, binding = 2) uniform usampler2D gbuffer_ids;
 layout(set = 0, binding = 3, rgba32f) uniform image2D accumulation;
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
@@ -78,7 +78,8 @@ vec2 hit_uv1(TriangleHit h) {
 // Whether any texture the hit shading reads takes TEXCOORD_1 (normal textures read TEXCOORD_0).
 bool any_texture_reads_uv1(GpuMaterial m) {
     return reads_uv1(m.base_color_uv_rows) || reads_uv1(m.metallic_roughness_uv_rows) ||
-           reads_uv1(m.emissive_uv_rows) || reads_uv1(m.transmission_uv_rows) || reads_uv1(m.specular_uv_rows);
+           reads_uv1(m.emissive_uv_rows) || reads_uv1(m.transmission_uv_rows) || reads_uv1(m.specular_uv_rows) ||
+           reads_uv1(m.specular_color_uv_rows);
 }
 
 vec4 hit_color(TriangleHit h) {
@@ -258,7 +259,7 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     s.m.transmission = mat.z;
     s.m.ior = 1.0 + 3.0 * mat.w;
     s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
-    s.m.specular_color = materials[material].specular_color.rgb;
+    s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[6], p, 0).rgb;
     face_viewer(s, v);
     return s;
 }
@@ -345,6 +346,10 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, uv, uv1), 0.0).a;
     }
     s.m.specular_color = m.specular_color.rgb;
+    if (m.specular_color_texture >= 0) {
+        s.m.specular_color *= textureLod(textures[nonuniformEXT(m.specular_color_texture)],
+                                         texture_uv(m.specular_color_uv_rows, uv, uv1), 0.0).rgb;
+    }
     face_viewer(s, v);
     // Matches render/lights.rs: emissive surfaces are lights chosen by their factor's power (a texture scales
     // what a sample brings, not how often it is chosen), one-sided ones only from the front.

@@ -22,7 +22,8 @@ layout(location = 2) out vec4 out_geometric_normal;
 layout(location = 3) out vec4 out_albedo;
 layout(location = 4) out vec4 out_material;
 layout(location = 5) out vec4 out_emission;
-layout(location = 6) out uvec2 out_ids;
+layout(location = 6) out vec4 out_specular_color;
+layout(location = 7) out uvec2 out_ids;
 
 void main() {
     GBufferDraw d = draws[in_draw];
@@ -90,5 +91,11 @@ void main() {
     }
     out_material = vec4(metallic_roughness, transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
     out_emission = vec4(emission, 0.0);
+    // The texel alone: the factor may exceed 1, beyond what this 8-bit sRGB attachment holds.
+    out_specular_color = vec4(1.0);
+    if (m.specular_color_texture >= 0) {
+        out_specular_color.rgb = texture(textures[nonuniformEXT(m.specular_color_texture)],
+                                         texture_uv(m.specular_color_uv_rows, in_uv, in_uv1)).rgb;
+    }
     out_ids = uvec2(d.instance + 1u, d.material);
 }

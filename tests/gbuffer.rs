@@ -83,10 +83,10 @@ fn srgb_channel(code: u8) -> f32 {
     strata::output::srgb_to_linear(f32::from(code) / 255.0)
 }
 
-/// Asserts that an emission read back is the factor times the sRGB texel: each channel within a quarter of the
-/// gap to the next 8-bit code. GPUs decode sRGB in hardware to about that (an NVIDIA H100 gave 0.50391 for code
+/// Asserts that a colour read back (`what`: an emission, a specular colour) is the factor times the sRGB texel:
+/// each channel within a quarter of the gap to the next 8-bit code. GPUs decode sRGB in hardware to about that (an NVIDIA H100 gave 0.50391 for code
 /// 188, exactly 0.50289), which still tells every code apart and sRGB from linear (0.737 for 188).
-fn assert_emission(got: Vec3, factor: Vec3, srgb_texel: [u8; 4], pixel: (u32, u32)) {
+fn assert_srgb_texel_times(what: &str, got: Vec3, factor: Vec3, srgb_texel: [u8; 4], pixel: (u32, u32)) {
     let want = emission_of(factor, srgb_texel);
     for i in 0..3 {
         let code = srgb_texel[i];
@@ -94,7 +94,7 @@ fn assert_emission(got: Vec3, factor: Vec3, srgb_texel: [u8; 4], pixel: (u32, u3
         let tolerance = factor[i] * gap / 8.0 + 1e-5;
         assert!(
             (got[i] - want[i]).abs() <= tolerance,
-            "{pixel:?}: emission {got}, expected {want} (± {tolerance} in channel {i})"
+            "{pixel:?}: {what} {got}, expected {want} (± {tolerance} in channel {i})"
         );
     }
 }
@@ -406,20 +406,22 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
         let mat = frame.at(MATERIAL, x, y);
         let step = 0.5 / 255.0 + 1e-4;
         assert!((mat[0] - metallic).abs() < step && (mat[1] - roughness).abs() < step, "({x}, {y}): {mat:?}");
-        assert_emission(Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]), Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
+        let emission = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+        assert_srgb_texel_times("emission", emission, Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
     });
     drop(pass);
     gpu.finish().unwrap();
 }
 
 /// KHR_texture_transform applies to every texture the pass reads, the transmission texture's R channel scales
-/// its factor and the specular texture's alpha its factor (into the geometric normal's spare channel). Each texture holds two texels, left and right; the transforms (offset 0.55, scale 0.4 in
-/// u) send the whole plane to the right one, so an untransformed lookup shows as the left texel on half of it. A
-/// normal texture turned a quarter turn tilts the normal along the surface's ∂p/∂v instead of ∂p/∂u: its
-/// tangent frame turns with it.
+/// its factor and the specular texture's alpha its factor (into the geometric normal's spare channel); the
+/// specular colour texel (sRGB) fills its own attachment. Each texture holds two texels, left and right; the
+/// transforms (offset 0.55, scale 0.4 in u) send the whole plane to the right one, so an untransformed lookup
+/// shows as the left texel on half of it. A normal texture turned a quarter turn tilts the normal along the
+/// surface's ∂p/∂v instead of ∂p/∂u: its tangent frame turns with it.
 #[test]
 fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textures_scale_their_factors() {
-    use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL};
+    use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL, SPECULAR_COLOR};
     use strata::scene::{Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = common::GpuTest::raster_only();
     let pass = GBufferPass::new(gpu.device(), 3).unwrap();
@@ -453,6 +455,9 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
     m.transmission_texture = uses(0, right);
     m.specular_texture = uses(0, right);
     m.emissive_texture = uses(1, right);
+    // The attachment holds the specular colour texel alone; its factor is applied where the G-buffer is read.
+    m.specular_color = Vec3::new(4.0, 0.5, 0.25);
+    m.specular_color_texture = uses(1, right);
     m.normal_texture = uses(2, quarter_turn);
     let primitive = &scene.meshes[0].primitives[0];
     let (dpdu, dpdv) = (primitive.dpdu[0], primitive.dpdv[0]);
@@ -472,7 +477,10 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
                 && (mat[2] - transmission).abs() < step,
             "({x}, {y}): material {mat:?}"
         );
-        assert_emission(Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]), Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
+        let emission = Vec3::from_slice(&frame.at(EMISSION, x, y)[..3]);
+        assert_srgb_texel_times("emission", emission, Vec3::new(2.0, 1.0, 0.5), emissive, (x, y));
+        let specular_color = Vec3::from_slice(&frame.at(SPECULAR_COLOR, x, y)[..3]);
+        assert_srgb_texel_times("specular colour", specular_color, Vec3::ONE, emissive, (x, y));
         let got = frame.at(GEOMETRIC_NORMAL, x, y)[3];
         assert!((got - specular).abs() < 1e-3, "({x}, {y}): specular {got}, expected {specular}");
         let normal = Vec3::from_slice(&frame.at(SHADING_NORMAL, x, y)[..3]);

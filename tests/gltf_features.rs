@@ -46,7 +46,8 @@ fn document(buffer_entry: Value) -> Value {
                 "KHR_materials_ior": {"ior": 1.33},
                 "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.8, 0.6],
                     "specularTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.25, 0]}}},
-                    "specularColorTexture": {"index": 0}}
+                    "specularColorTexture": {"index": 1, "texCoord": 1,
+                        "extensions": {"KHR_texture_transform": {"scale": [0.5, 0.5]}}}}
             },
             "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
                 "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [2, 2], "rotation": 0}}}},
@@ -54,7 +55,7 @@ fn document(buffer_entry: Value) -> Value {
                 "extensions": {"KHR_texture_transform": {"offset": [0, 0.25], "rotation": 1.5707964}}},
             "emissiveTexture": {"index": 0, "texCoord": 1}
         }],
-        "textures": [{"source": 0, "sampler": 0}],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 0}],
         "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9729}],
         "images": [{"uri": png_data_uri()}],
         "buffers": [buffer_entry],
@@ -142,6 +143,11 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!((m.specular, m.specular_color), (0.5, Vec3::new(1.0, 0.8, 0.6)));
     let specular = m.specular_texture.unwrap().transform.unwrap();
     assert_eq!(specular.apply(Vec2::new(0.5, 0.5)), Vec2::new(0.75, 0.5));
+    // The specular colour texture holds sRGB colour, like base colour and emission (KHR_materials_specular).
+    let specular_color = m.specular_color_texture.unwrap();
+    assert_eq!((specular_color.texture, specular_color.tex_coord), (1, 1));
+    assert_eq!(specular_color.transform.unwrap().apply(Vec2::new(0.5, 0.5)), Vec2::new(0.25, 0.25));
+    assert!(scene.textures[1].srgb, "a texture used only as specular colour is sRGB");
     let sampler = scene.textures[0].sampler;
     assert_eq!(
         (sampler.wrap_s, sampler.wrap_t),
@@ -156,14 +162,9 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!(light.shape, LightShape::Spot { inner_cone: 0.2, outer_cone: 0.5, radius: 0.0 });
     assert_eq!(light.emission, Vec3::new(4.0, 2.0, 1.0));
     assert_eq!(light.world_from_light.w_axis.truncate(), Vec3::new(0.0, 3.0, 0.0));
-    assert_eq!(scene.warnings.len(), 3, "{:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
     assert!(scene.warnings[0].contains("EXT_made_up_extension"));
     assert!(scene.warnings[1].contains("\"lit glass\": its normal texture uses TEXCOORD_1"), "{:?}", scene.warnings[1]);
-    assert!(
-        scene.warnings[2].contains("\"lit glass\": its KHR_materials_specular specularColorTexture is not read"),
-        "{:?}",
-        scene.warnings[2]
-    );
 }
 
 /// A normal texture's transform that is not a KHR_texture_transform object fails with the material's name.

@@ -267,6 +267,24 @@ fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_r
     );
 }
 
+/// Specular colour textures (RGB scales the colour factor, KHR_materials_specular) are read, through their
+/// KHR_texture_transform, in the G-buffer (whose 8-bit attachment holds the texel, the factor applied where it is
+/// read), at the reference mode's visible hits and at the rays' hits: a texture whose right texel is magenta,
+/// transformed onto it, renders the showcase as the colour factor without its green does. Its left texel, green,
+/// would show if the transform were lost.
+#[test]
+fn transformed_specular_colour_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
+    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
+    assert_transformed_texture_acts_as_factor(
+        "green | magenta",
+        &[[0, 255, 0, 255], [255, 0, 255, 255]],
+        right_half,
+        |m, texture| m.specular_color_texture = Some(texture),
+        |m| m.specular_color *= Vec3::new(1.0, 0.0, 1.0),
+        "a specular colour without green",
+    );
+}
+
 /// Gives every showcase material the two-texel texture `texels`, read through `transform` (`use_texture`), and
 /// checks that it renders in both modes exactly as the showcase with `as_factor` applied to every material.
 fn assert_transformed_texture_acts_as_factor(

@@ -41,8 +41,8 @@ struct GpuMaterial {
     Bump bump;               // kind BUMP_NONE: no bump
     int metallic_roughness_texture;  // roughness in G, metalness in B (glTF 2.0 §3.9.2); -1: none
     int specular_texture;    // A scales the specular factor (KHR_materials_specular); -1: none
+    int specular_color_texture;  // RGB scales the specular colour (KHR_materials_specular); -1: none
     int pad0;
-    int pad1;
     // Each texture's KHR_texture_transform (transform_uv), identity without one.
     vec4 metallic_roughness_uv_rows[2];
     vec4 normal_uv_rows[2];
@@ -50,6 +50,7 @@ struct GpuMaterial {
     vec4 transmission_uv_rows[2];
     vec4 specular_color;     // rgb KHR_materials_specular colour (tints the dielectric F0)
     vec4 specular_uv_rows[2];
+    vec4 specular_color_uv_rows[2];
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.

@@ -3,7 +3,7 @@
 //! the RGBA32F accumulation image.
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
-use super::gbuffer_layout::IDS;
+use super::gbuffer_layout::{ATTACHMENTS, IDS};
 use super::textures::GpuTextures;
 use crate::shaders;
 use crate::vk::accel::AccelerationStructure;
@@ -47,7 +47,12 @@ impl AccumulatePass {
         device.require_ray_queries("the accumulation pass")?;
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
-            Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: 6 },
+            // Every G-buffer attachment but the ids, which binding 2 reads as unsigned integers.
+            Binding {
+                binding: 1,
+                kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                count: ATTACHMENTS.len() as u32 - 1,
+            },
             Binding::new(2, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
             Binding::new(3, vk::DescriptorType::STORAGE_IMAGE),
             Binding::new(4, vk::DescriptorType::STORAGE_BUFFER),

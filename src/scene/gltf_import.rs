@@ -68,7 +68,6 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
     warn_about_unread_uv_sets(&mut scene);
-    warn_about_specular_color_textures(document, &mut scene);
     for mesh in document.meshes() {
         let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
         let mut primitives = Vec::new();
@@ -339,6 +338,7 @@ fn warn_about_unread_uv_sets(scene: &mut Scene) {
             ("emissive", m.emissive_texture, 1),
             ("transmission", m.transmission_texture, 1),
             ("specular", m.specular_texture, 1),
+            ("specular colour", m.specular_color_texture, 1),
         ];
         for (what, t, last_read) in uses {
             if let Some(t) = t.filter(|t| t.tex_coord > last_read) {
@@ -350,18 +350,6 @@ fn warn_about_unread_uv_sets(scene: &mut Scene) {
         }
     }
     scene.warnings.extend(warnings);
-}
-
-/// The specular colour texture is not read (README, known limits): its factor tints every point alike.
-fn warn_about_specular_color_textures(document: &gltf::Document, scene: &mut Scene) {
-    for (gltf_material, m) in document.materials().zip(&scene.materials) {
-        if gltf_material.specular().is_some_and(|s| s.specular_color_texture().is_some()) {
-            scene.warnings.push(format!(
-                "material \"{}\": its KHR_materials_specular specularColorTexture is not read (its specularColorFactor is)",
-                m.name
-            ));
-        }
-    }
 }
 
 fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> {
@@ -405,14 +393,16 @@ fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> 
             .specular()
             .map(|s| Vec3::from_array(s.specular_color_factor()))
             .unwrap_or(defaults.specular_color),
+        specular_color_texture: m.specular().and_then(|s| s.specular_color_texture()).as_ref().map(texture_ref),
         bump: None,
     })
 }
 
-/// Base colour and emissive textures hold sRGB-encoded colour; the rest hold linear data (glTF 2.0 §3.9).
+/// Base colour, emissive and specular colour textures hold sRGB-encoded colour; the rest hold linear data (glTF
+/// 2.0 §3.9, KHR_materials_specular).
 fn mark_color_textures(scene: &mut Scene) {
     for m in &scene.materials {
-        for t in [m.base_color_texture, m.emissive_texture].into_iter().flatten() {
+        for t in [m.base_color_texture, m.emissive_texture, m.specular_color_texture].into_iter().flatten() {
             if let Some(texture) = scene.textures.get_mut(t.texture) {
                 texture.srgb = true;
             }

@@ -80,7 +80,8 @@ pub struct Texture {
     pub name: String,
     pub image: usize,
     pub sampler: Sampler,
-    /// Used as colour (base colour, emissive): its texels are sRGB-encoded (glTF 2.0 §3.9.2).
+    /// Used as colour (base colour, emissive, specular colour): its texels are sRGB-encoded (glTF 2.0 §3.9.2,
+    /// KHR_materials_specular).
     pub srgb: bool,
 }
 
@@ -188,6 +189,8 @@ pub struct Material {
     /// `KHR_materials_specular` colour: tints the dielectric reflectance at normal incidence (F0), which stays at
     /// most 1.
     pub specular_color: Vec3,
+    /// `KHR_materials_specular` colour texture (sRGB): its RGB scales `specular_color`.
+    pub specular_color_texture: Option<TextureRef>,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
 }
@@ -216,6 +219,7 @@ impl Default for Material {
             specular: 1.0,
             specular_texture: None,
             specular_color: Vec3::ONE,
+            specular_color_texture: None,
             bump: None,
         }
     }
