@@ -255,12 +255,10 @@ fn transformed_transmission_textures_shade_like_their_factors_in_both_modes_and_
 /// (Without the transform the showcase's UVs reach both texels.)
 #[test]
 fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    // Scale 0 in u: every lookup lands on the right texel, whatever the UVs (the floor's run past 1).
-    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
     assert_transformed_texture_acts_as_factor(
         "reflects | does not",
         &[[255, 255, 255, 255], [255, 255, 255, 0]],
-        right_half,
+        ONTO_THE_RIGHT_TEXEL,
         |m, texture| m.specular_texture = Some(texture),
         |m| m.specular = 0.0,
         "specular 0",
@@ -274,16 +272,20 @@ fn transformed_specular_textures_shade_like_their_factors_in_both_modes_and_at_r
 /// would show if the transform were lost.
 #[test]
 fn transformed_specular_colour_textures_shade_like_their_factors_in_both_modes_and_at_ray_hits() {
-    let right_half = UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
     assert_transformed_texture_acts_as_factor(
         "green | magenta",
         &[[0, 255, 0, 255], [255, 0, 255, 255]],
-        right_half,
+        ONTO_THE_RIGHT_TEXEL,
         |m, texture| m.specular_color_texture = Some(texture),
         |m| m.specular_color *= Vec3::new(1.0, 0.0, 1.0),
         "a specular colour without green",
     );
 }
+
+/// Sends every lookup of a two-texel texture to its right texel: scale 0 in u, whatever the UVs (the showcase
+/// floor's run past 1).
+const ONTO_THE_RIGHT_TEXEL: UvTransform =
+    UvTransform { offset: Vec2::new(0.75, 0.0), rotation: 0.0, scale: Vec2::new(0.0, 1.0) };
 
 /// Gives every showcase material the two-texel texture `texels`, read through `transform` (`use_texture`), and
 /// checks that it renders in both modes exactly as the showcase with `as_factor` applied to every material.

@@ -50,7 +50,7 @@ impl GBuffer {
 pub struct GBufferFrame {
     pub width: u32,
     pub height: u32,
-    /// Per attachment except `ids`, as linear RGBA floats (albedo decoded from sRGB).
+    /// Per attachment except `ids`, as linear RGBA floats (the sRGB ones, albedo and specular colour, decoded).
     pub channels: Vec<Vec<[f32; 4]>>,
     /// (instance + 1, material); (0, _) where nothing was drawn.
     pub ids: Vec<[u32; 2]>,
