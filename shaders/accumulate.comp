@@ -75,6 +75,17 @@ vec2 hit_uv1(TriangleHit h) {
     return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
 }
 
+// A hit's coordinates in one UV set (x, y) and twice its triangle's area in that set (z).
+vec3 hit_uv_and_area(uint64_t set, TriangleHit h) {
+    Vec2Array uvs = Vec2Array(set);
+    vec2 a = uvs.v[h.i0];
+    vec2 b = uvs.v[h.i1];
+    vec2 c = uvs.v[h.i2];
+    vec2 e1 = b - a;
+    vec2 e2 = c - a;
+    return vec3(h.w.x * a + h.w.y * b + h.w.z * c, abs(e1.x * e2.y - e1.y * e2.x));
+}
+
 // Whether any texture the hit shading reads takes TEXCOORD_1 (normal textures read TEXCOORD_0).
 bool any_texture_reads_uv1(GpuMaterial m) {
     return reads_uv1(m.base_color_uv_rows) || reads_uv1(m.metallic_roughness_uv_rows) ||
@@ -170,6 +181,28 @@ vec2 sample2(uint pixel, uint dim) {
 
 float sample1(uint pixel, uint dim) {
     return sample_1d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+}
+
+// Ray cones for texture filtering at ray hits (Akenine-Möller et al., "Texture Level of Detail Strategies for
+// Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20): a ray carries its pixel's footprint as a width at its
+// origin and a spread angle, so a hit reads the mip level a direct view of the same footprint would. Reflection
+// and refraction keep the spread (the surface's curvature is not known here), and a rough lobe adds nothing: its
+// spread is what the chain's samples integrate.
+//
+// The camera's pixel cone as (width at the eye, spread): a perspective pixel subtends α = 2·tan(fov_y/2)/height at
+// the image's centre (§20.3.4); an orthographic one keeps its width.
+vec2 pixel_cone() {
+    GpuCamera c = cameras[pc.counter_slot];
+    float pixel = 2.0 * c.lens.y / float(pc.height);
+    return c.range.z != 0.0 ? vec2(pixel, 0.0) : vec2(0.0, pixel);
+}
+
+// A cone's footprint on a triangle in a UV set's units, as a level of detail: log2 of its width along the surface,
+// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (eq. 34 without the texture's own
+// size, which texture_lod adds). Twice each area is given; the factors cancel.
+float footprint_lod(float width_along_surface, float uv_area2, float world_area2) {
+    float uv_per_world = uv_area2 / max(world_area2, 1e-30);
+    return 0.5 * log2(max(width_along_surface * width_along_surface * uv_per_world, 1e-30));
 }
 
 // A ray origin just off the surface on the side the ray leaves towards (scaled to the position's magnitude).
@@ -269,7 +302,7 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
 // mirror or through glass. `visible` (a primary ray of the reference mode) also turns double-sided faces to the
 // viewer, as the raster pass does; deeper hits keep their side, so a ray inside a double-sided transmissive mesh
 // still knows it is inside.
-Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
+Surface hit_surface(rayQueryEXT q, vec3 v, float cone_width, const bool visible) {
     TriangleHit h = triangle_hit(
         rayQueryGetIntersectionInstanceCustomIndexEXT(q, true) + rayQueryGetIntersectionGeometryIndexEXT(q, true),
         uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true)), rayQueryGetIntersectionBarycentricsEXT(q, true));
@@ -280,7 +313,8 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     vec3 p2 = positions.v[h.i2];
     Vec3Array normals = Vec3Array(h.r.normals);
     vec3 n_object = h.w.x * normals.v[h.i0] + h.w.y * normals.v[h.i1] + h.w.z * normals.v[h.i2];
-    vec2 uv = hit_uv(h);
+    vec3 uv_area = hit_uv_and_area(h.r.uvs, h);
+    vec2 uv = uv_area.xy;
 
     mat3 m3 = mat3(world_from_object);
     // Normals transform by the cofactor matrix (det · inverse transpose); the sign keeps mirrored instances right.
@@ -288,17 +322,24 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     float det_sign = dot(m3[0], cross(m3[1], m3[2])) < 0.0 ? -1.0 : 1.0;
     Surface s;
     s.position = world_from_object * vec4(h.w.x * p0 + h.w.y * p1 + h.w.z * p2, 1.0);
-    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));
+    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));  // (M·e1) × (M·e2): twice the world area
     s.geometric = normalize(ng);
     vec3 ns = det_sign * (cofactor * n_object);
     s.normal = dot(ns, ns) > 0.0 ? normalize(ns) : s.geometric;
     if (dot(s.normal, s.geometric) < 0.0) s.geometric = -s.geometric;
 
     GpuMaterial m = materials[h.r.material];
-    vec2 uv1 = any_texture_reads_uv1(m) ? hit_uv1(h) : uv;
+    vec3 uv1_area = any_texture_reads_uv1(m) ? hit_uv_and_area(h.r.uvs1, h) : uv_area;
+    vec2 uv1 = uv1_area.xy;
+    // The cone's footprint in each UV set; texture_lod adds each texture's own density.
+    float world_area2 = length(ng);
+    float along_surface = cone_width / max(abs(dot(s.geometric, v)), 1e-3);
+    vec2 lod = vec2(footprint_lod(along_surface, uv_area.z, world_area2),
+                    footprint_lod(along_surface, uv1_area.z, world_area2));
     vec4 base = m.base_color * hit_color(h);
     if (m.base_color_texture >= 0) {
-        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1), 0.0);
+        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1),
+                           texture_lod(m.base_color_uv_rows, lod));
     }
     if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
@@ -308,7 +349,8 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
         vec3 dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
         vec3 n = s.normal;
         if (m.normal_texture >= 0) {
-            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, uv), 0.0).xyz;
+            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, uv),
+                                    texture_lod(m.normal_uv_rows, lod)).xyz;
             vec3 map_dpdu = dpdu;
             vec3 map_dpdv = dpdv;
             transform_derivatives(m.normal_uv_rows, map_dpdu, map_dpdv);
@@ -324,31 +366,36 @@ Surface hit_surface(rayQueryEXT q, vec3 v, const bool visible) {
     }
     s.emission = m.emissive.rgb;
     if (m.emissive_texture >= 0) {
-        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv, uv1), 0.0).rgb;
+        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv, uv1),
+                                 texture_lod(m.emissive_uv_rows, lod)).rgb;
     }
     s.m.albedo = base.rgb;
     // Metalness in B, roughness in G (glTF 2.0 §3.9.2), as gbuffer.frag reads them.
     vec2 metallic_roughness = vec2(m.metallic, m.roughness);
     if (m.metallic_roughness_texture >= 0) {
         metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)],
-                                         texture_uv(m.metallic_roughness_uv_rows, uv, uv1), 0.0).bg;
+                                         texture_uv(m.metallic_roughness_uv_rows, uv, uv1),
+                                         texture_lod(m.metallic_roughness_uv_rows, lod)).bg;
     }
     s.m.metallic = metallic_roughness.x;
     s.m.roughness = metallic_roughness.y;
     s.m.transmission = m.transmission;
     if (m.transmission_texture >= 0) {
         s.m.transmission *= textureLod(textures[nonuniformEXT(m.transmission_texture)],
-                                       texture_uv(m.transmission_uv_rows, uv, uv1), 0.0).r;
+                                       texture_uv(m.transmission_uv_rows, uv, uv1),
+                                       texture_lod(m.transmission_uv_rows, lod)).r;
     }
     s.m.ior = m.ior;
     s.m.specular = m.emissive.w;
     if (m.specular_texture >= 0) {
-        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, uv, uv1), 0.0).a;
+        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, uv, uv1),
+                                   texture_lod(m.specular_uv_rows, lod)).a;
     }
     s.m.specular_color = m.specular_color.rgb;
     if (m.specular_color_texture >= 0) {
         s.m.specular_color *= textureLod(textures[nonuniformEXT(m.specular_color_texture)],
-                                         texture_uv(m.specular_color_uv_rows, uv, uv1), 0.0).rgb;
+                                         texture_uv(m.specular_color_uv_rows, uv, uv1),
+                                         texture_lod(m.specular_color_uv_rows, lod)).rgb;
     }
     face_viewer(s, v);
     // Matches render/lights.rs: emissive surfaces are lights chosen by their factor's power (a texture scales
@@ -385,6 +432,7 @@ struct ChainRay {
     uint pixel;
     vec3 throughput;
     uint lane;  // the invocation whose pixel it belongs to
+    vec2 cone;  // the ray cone: width at the origin, spread angle (pixel_cone)
 };
 
 // The workgroup's chain rays, packed: lavapipe runs 8 lanes in lockstep, so chains scattered over the
@@ -447,7 +495,8 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
             break;
         }
         vec3 v = -r.dir;
-        Surface s = hit_surface(q, v, false);
+        r.cone.x += r.cone.y * t_hit;
+        Surface s = hit_surface(q, v, r.cone.x, false);
         float w = 1.0;
         if (r.pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
             float cos_light = abs(dot(s.geometric, r.dir));
@@ -508,6 +557,7 @@ void main() {
     ChainRay r;
     r.pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
     r.lane = lane;
+    r.cone = pixel_cone();
     if (in_image) {
         if (PRIMARY_RAYS != 0u) {
             vec3 o;
@@ -520,7 +570,8 @@ void main() {
             rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, o, t_range.x, d, t_range.y);
             run_query(q);
             if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
-                Surface s = hit_surface(q, -d, true);
+                r.cone.x += r.cone.y * rayQueryGetIntersectionTEXT(q, true);
+                Surface s = hit_surface(q, -d, r.cone.x, true);
                 value = vec4(shade_visible(s, -d, r, chain, shadow_rays), 1.0);
             }
         } else {
@@ -528,6 +579,7 @@ void main() {
             if (ids.x != 0u) {
                 vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
                 vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
+                r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
                 Surface s = gbuffer_surface(p, ids.y, v);
                 value = vec4(shade_visible(s, v, r, chain, shadow_rays), 1.0);
             }

@@ -43,7 +43,8 @@ struct GpuMaterial {
     int specular_texture;    // A scales the specular factor (KHR_materials_specular); -1: none
     int specular_color_texture;  // RGB scales the specular colour (KHR_materials_specular); -1: none
     int pad0;
-    // Each texture's KHR_texture_transform (transform_uv), identity without one.
+    // Each texture's KHR_texture_transform (transform_uv), identity without one; the spare w of the first row
+    // names the UV set (reads_uv1), of the second the texture's level-of-detail offset (texture_lod).
     vec4 metallic_roughness_uv_rows[2];
     vec4 normal_uv_rows[2];
     vec4 emissive_uv_rows[2];
@@ -62,6 +63,13 @@ vec2 transform_uv(vec4 rows[2], vec2 uv) {
 // Whether a texture reads TEXCOORD_1 (its rows' spare channel; GpuMaterial::new), not TEXCOORD_0.
 bool reads_uv1(vec4 rows[2]) {
     return rows[0].w != 0.0;
+}
+
+// The level of detail for reading a texture over a footprint whose level in its UV set's units is `footprint_lod`
+// (x: TEXCOORD_0, y: TEXCOORD_1): the rows' spare w adds the texture's texels per unit of UV length
+// (texel_lod_offset in gbuffer_layout.rs).
+float texture_lod(vec4 rows[2], vec2 footprint_lod) {
+    return (reads_uv1(rows) ? footprint_lod.y : footprint_lod.x) + rows[1].w;
 }
 
 // A texture's coordinates: its set's UV through its transform.

@@ -164,9 +164,9 @@ impl GBufferPass {
     /// Uploads `scene`'s materials (plus glTF's default material, last, for primitives without one). Once per
     /// frame.
     pub fn materials(&self, scene: &Scene, textures: &GpuTextures) -> Result<GBufferMaterials> {
-        let mut materials: Vec<GpuMaterial> =
-            scene.materials.iter().map(|m| GpuMaterial::new(m, textures.images.len())).collect();
-        materials.push(GpuMaterial::new(&Material::default(), textures.images.len()));
+        let sizes: Vec<(u32, u32)> = textures.images.iter().map(|i| (i.extent.width, i.extent.height)).collect();
+        let mut materials: Vec<GpuMaterial> = scene.materials.iter().map(|m| GpuMaterial::new(m, &sizes)).collect();
+        materials.push(GpuMaterial::new(&Material::default(), &sizes));
         let buffer =
             Buffer::with_data(&self.device, "gbuffer materials", &materials, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
         Ok(GBufferMaterials { buffer })

@@ -161,16 +161,19 @@ pub struct GpuMaterial {
 }
 
 impl GpuMaterial {
-    pub fn new(m: &Material, texture_count: usize) -> Self {
+    /// `texture_sizes`: width and height of each of the scene's textures, in texels (level 0).
+    pub fn new(m: &Material, texture_sizes: &[(u32, u32)]) -> Self {
         let texture = |t: Option<crate::scene::TextureRef>| {
-            t.filter(|t| t.texture < texture_count).map(|t| t.texture as i32).unwrap_or(-1)
+            t.filter(|t| t.texture < texture_sizes.len()).map(|t| t.texture as i32).unwrap_or(-1)
         };
         // The first row's spare w says which UV set the texture reads: 1 for TEXCOORD_1, else TEXCOORD_0 (the
-        // importer warns about the sets strata does not load).
+        // importer warns about the sets strata does not load). The second row's holds the texture's level of
+        // detail per unit of UV footprint (texel_lod_offset), which ray hits add to their ray cone's.
         let uv_rows = |t: Option<crate::scene::TextureRef>| {
             let uv = t.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
             let set = if t.is_some_and(|t| t.tex_coord == 1) { 1.0 } else { 0.0 };
-            [uv.row(0).extend(set), uv.row(1).extend(0.0)]
+            let size = t.and_then(|t| texture_sizes.get(t.texture)).copied().unwrap_or((1, 1));
+            [uv.row(0).extend(set), uv.row(1).extend(texel_lod_offset(size, uv))]
         };
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (0, 0.0),
@@ -210,6 +213,20 @@ impl GpuMaterial {
     }
 }
 
+/// The level of detail a texture adds to a footprint measured in its UV set: ½·log2(width · height · |det A|),
+/// the log2 of texels per unit of UV length through the transform A (Akenine-Möller et al., "Texture Level of
+/// Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20, eq. 34's Δ with the texture's
+/// size and A's area scale moved out of the triangle term). Clamped, so a degenerate transform reads level 0.
+pub fn texel_lod_offset((width, height): (u32, u32), uv_transform: Mat3) -> f32 {
+    let a = uv_transform.x_axis.x * uv_transform.y_axis.y - uv_transform.y_axis.x * uv_transform.x_axis.y;
+    let texels_per_uv_area = width as f32 * height as f32 * a.abs();
+    if texels_per_uv_area > 0.0 {
+        (0.5 * texels_per_uv_area.log2()).clamp(-64.0, 64.0)
+    } else {
+        -64.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,6 +255,25 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, specular_color_texture), 152);
         assert_eq!(offset_of!(GpuMaterial, specular_color_uv_rows), 336);
         assert_eq!(size_of::<GpuMaterial>(), 368);
+    }
+
+    #[test]
+    fn a_textures_level_offset_counts_texels_per_uv_length_through_its_transform() {
+        use crate::scene::UvTransform;
+        use glam::Vec2;
+        assert_eq!(texel_lod_offset((256, 256), Mat3::IDENTITY), 8.0);
+        assert_eq!(texel_lod_offset((512, 128), Mat3::IDENTITY), 8.0);
+        // Scaling UVs by 8 packs 8× the texels into a unit of UV length; rotation and offset change nothing.
+        let tiled = UvTransform { offset: Vec2::new(0.3, 0.1), rotation: 0.7, scale: Vec2::splat(8.0) };
+        assert!((texel_lod_offset((48, 48), tiled.matrix()) - (48f32.log2() + 3.0)).abs() < 1e-5);
+        assert_eq!(texel_lod_offset((48, 48), Mat3::ZERO), -64.0);
+        let m = Material {
+            base_color_texture: Some(crate::scene::TextureRef { texture: 1, tex_coord: 0, transform: None }),
+            ..Default::default()
+        };
+        let gpu = GpuMaterial::new(&m, &[(2, 2), (1024, 1024)]);
+        assert_eq!(gpu.base_color_texture, 1);
+        assert_eq!(gpu.base_color_uv_rows[1].w, 10.0);
     }
 
     #[test]
