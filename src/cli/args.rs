@@ -1,0 +1,199 @@
+//! The command line's options, with the parsers that check them as they are read.
+use clap::Args;
+use std::path::PathBuf;
+use strata::scene::settings::MAX_IMAGE_SIDE as MAX_SIDE;
+use strata::scene::settings::MAX_SPP;
+
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Samples timed per case (the median is reported), after one warm-up.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub samples: u32,
+    /// The scene file of the "cornell" cases.
+    #[arg(long, value_name = "FILE", default_value = "scenes/cornell.toml")]
+    pub scene: PathBuf,
+    /// The second scene of the frame benchmark.
+    #[arg(long, value_name = "FILE", default_value = "scenes/showcase.toml")]
+    pub showcase: PathBuf,
+    /// Which benchmark: gbuffer (pass times and bump cost), frame (whole distributed-ray-traced frames, the
+    /// ray-query ceiling, scaling and memory), or all.
+    #[arg(long, value_name = "WHICH", default_value = "all", value_parser = ["all", "gbuffer", "frame"])]
+    pub only: String,
+    /// Samples per pixel of the frame benchmark.
+    #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub spp: u32,
+    /// Image size of the frame benchmark (its scaling runs use a quarter, half and all of it).
+    #[arg(long, value_name = "WxH", default_value = "512x512", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Run under the Khronos validation layer and exit non-zero on any error or warning: a check that the
+    /// benchmark itself is sound (the layer slows everything, so the figures mean nothing then).
+    #[arg(long)]
+    pub validate: bool,
+    /// Use this device: its index in `strata info`, or part of its name.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+}
+
+#[derive(Args)]
+pub struct GpuArgs {
+    /// Run under the Khronos validation layer (synchronization validation and best practices on) and print
+    /// its messages; exit non-zero if it reports any error or warning.
+    #[arg(long)]
+    pub validate: bool,
+    /// Use this device: its index in `strata info`, or part of its name (e.g. "llvmpipe").
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The scene: a glTF 2.0 file (.gltf or .glb), or a scene file (.toml, see docs/scene-format.md) that names
+    /// one and adds camera, lights, materials, motion and render settings.
+    pub scene: PathBuf,
+    /// Output file, .png (exposed, tone-mapped, 8-bit sRGB) or .exr (linear radiance, 32-bit float)
+    /// [default: the scene file's render.output].
+    #[arg(short, long, value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Also write the linear radiance to this OpenEXR file (with the --aov layers, if any).
+    #[arg(long, value_name = "FILE")]
+    pub exr: Option<PathBuf>,
+    /// Image size in pixels [default: the scene file's, else 960x540].
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<(u32, u32)>,
+    /// Samples per pixel: each is a G-buffer pass at its own lens point, shutter time and sub-pixel jitter plus
+    /// an accumulation pass [default: the scene file's, else 16].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: Option<u32>,
+    /// How sample points are placed: regular (strata centres; aliases), random, jittered (one random point in
+    /// each of n x n strata, Cook 1984), multi-jittered (Kensler 2013) [default: the scene file's, else jittered].
+    #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
+    pub sampler: Option<strata::scene::settings::SamplerKind>,
+    /// Seed of every random choice; the same scene, options and seed give the same bits on the same device
+    /// [default: the scene file's, else 0].
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+    /// Thin-lens aperture radius in metres; 0 is a pinhole (everything sharp) [default: the scene's camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
+    pub aperture: Option<f32>,
+    /// Distance in metres of the plane in focus [default: the scene's camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
+    pub focus: Option<f32>,
+    /// Shutter interval in seconds; motion during it blurs. OPEN:CLOSE with equal times is a still frame
+    /// [default: the scene file's, else 0:0].
+    #[arg(long, value_name = "OPEN:CLOSE", value_parser = parse_shutter)]
+    pub shutter: Option<(f32, f32)>,
+    /// Exposure in stops: the PNG's radiance is scaled by 2^EV before tone mapping [default: 0].
+    #[arg(long, value_name = "EV", allow_hyphen_values = true)]
+    pub exposure: Option<f32>,
+    /// Tone map for the PNG: clamp (none), or filmic (an ACES fit) [default: the scene file's, else filmic].
+    #[arg(long, value_name = "NAME", value_parser = parse_tone_map)]
+    pub tone_map: Option<strata::scene::settings::ToneMap>,
+    /// Where each sample's visible surface comes from: raster (the G-buffer pass; fast, but each sample's pixel
+    /// jitter and lens point are shared by all pixels, so fine regular patterns can show moiré) or rays (a ray
+    /// per pixel with its own jitter and lens point: noise instead of moiré, the reference the raster mode is
+    /// tested against; the shutter time is still shared per sample) [default: the scene file's, else raster].
+    #[arg(long, value_name = "MODE", value_parser = parse_primary)]
+    pub primary: Option<strata::scene::settings::Primary>,
+    /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
+    /// 0.02,0.02,0.025].
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub background: Option<[f32; 3]>,
+    /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
+    /// emission, material. With an .exr they are layers of the EXR (raw values); with -o x.png each is a PNG
+    /// beside it, x.<name>.png (normals as ½+½n, depth and height scaled to their range).
+    #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
+    pub aov: Option<AovList>,
+    /// Render the fast raster preview (one sample, simple shading, no ray queries) instead.
+    #[arg(long)]
+    pub preview: bool,
+    /// No progress bar and no summary line (errors and warnings still go to stderr).
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Print the summary as one JSON object on stdout (for scripts).
+    #[arg(long)]
+    pub json: bool,
+    /// Let the glTF read files outside its own directory (absolute paths, ".."). Network URIs are never fetched.
+    #[arg(long)]
+    pub allow_any_uri: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+}
+
+#[derive(Args)]
+pub struct InfoArgs {
+    /// Also print the devices' validation messages (creates an instance with the layer when installed).
+    #[arg(long)]
+    pub validate: bool,
+}
+
+pub fn parse_sampler(text: &str) -> Result<strata::scene::settings::SamplerKind, String> {
+    strata::scene::settings::SamplerKind::parse(text).map_err(|e| e.to_string())
+}
+
+pub fn parse_primary(text: &str) -> Result<strata::scene::settings::Primary, String> {
+    strata::scene::settings::Primary::parse(text).map_err(|e| e.to_string())
+}
+
+pub fn parse_tone_map(text: &str) -> Result<strata::scene::settings::ToneMap, String> {
+    strata::scene::settings::ToneMap::parse(text).map_err(|e| e.to_string())
+}
+
+pub fn parse_non_negative(text: &str) -> Result<f32, String> {
+    let v: f32 = text.trim().parse().map_err(|_| format!("\"{text}\" is not a number"))?;
+    if !v.is_finite() || v < 0.0 {
+        return Err(format!("{v} must be a finite number, 0 or more"));
+    }
+    Ok(v)
+}
+
+pub fn parse_shutter(text: &str) -> Result<(f32, f32), String> {
+    let (open, close) = text.split_once(':').ok_or_else(|| format!("\"{text}\" is not OPEN:CLOSE, e.g. 0:0.25"))?;
+    let time = |s: &str| -> Result<f32, String> {
+        let v: f32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a time in seconds"))?;
+        if !v.is_finite() {
+            return Err(format!("{v} is not a finite time"));
+        }
+        Ok(v)
+    };
+    let (open, close) = (time(open)?, time(close)?);
+    if close < open {
+        return Err(format!("the shutter closes ({close}) before it opens ({open})"));
+    }
+    Ok((open, close))
+}
+
+pub fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| format!("\"{text}\" is not WIDTHxHEIGHT, e.g. 960x540"))?;
+    let side = |s: &str| -> Result<u32, String> {
+        let v: u32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a whole number of pixels"))?;
+        if v == 0 || v > MAX_SIDE {
+            return Err(format!("{v} pixels is outside 1..={MAX_SIDE}"));
+        }
+        Ok(v)
+    };
+    Ok((side(w)?, side(h)?))
+}
+
+/// The parsed `--aov` list (a newtype: clap reads a bare `Vec` as a multi-value option).
+#[derive(Clone)]
+pub struct AovList(pub Vec<strata::render::aov::Aov>);
+
+pub fn parse_aovs(text: &str) -> Result<AovList, String> {
+    strata::render::aov::Aov::parse_list(text).map(AovList).map_err(|e| e.to_string())
+}
+
+pub fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("\"{text}\" is not R,G,B (three numbers)"));
+    }
+    let mut rgb = [0.0; 3];
+    for (slot, part) in rgb.iter_mut().zip(parts) {
+        let v: f32 = part.trim().parse().map_err(|_| format!("\"{part}\" is not a number"))?;
+        if !v.is_finite() || v < 0.0 {
+            return Err(format!("{v} is not a finite non-negative radiance"));
+        }
+        *slot = v;
+    }
+    Ok(rgb)
+}

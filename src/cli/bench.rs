@@ -1,0 +1,201 @@
+//! `strata bench`: pass times from GPU timestamps and the frame benchmark's figures (docs/performance.md).
+use super::args::BenchArgs;
+use anyhow::{anyhow, Result};
+use strata::vk::{Gpu, GpuOptions};
+
+pub fn bench(args: BenchArgs) -> Result<()> {
+    // Each benchmark on its own device; the device goes before its validation log is read, so teardown messages
+    // count too.
+    let run = |benchmark: fn(&BenchArgs, Gpu) -> Result<()>| -> Result<()> {
+        let gpu = Gpu::new(&GpuOptions {
+            validation: args.validate,
+            echo_messages: args.validate,
+            device: args.device.clone(),
+            ..Default::default()
+        })?;
+        let log = gpu.validation_log();
+        benchmark(&args, gpu)?;
+        if args.validate {
+            log.check().map_err(|report| anyhow!("{report}"))?;
+        }
+        Ok(())
+    };
+    if args.only != "frame" {
+        run(bench_gbuffer)?;
+    }
+    if args.only != "gbuffer" {
+        if args.only == "all" {
+            println!();
+        }
+        run(bench_frame)?;
+    }
+    Ok(())
+}
+
+fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
+    use strata::bench::{fitted_exponent, time_frame};
+    use strata::scene::settings::Primary;
+    let (w, h) = args.size;
+    let pixels = f64::from(w) * f64::from(h);
+    println!(
+        "Frames of distributed ray tracing at {w}x{h}, {} spp (jittered), on {}",
+        args.spp, gpu.device.report.name
+    );
+    for path in [&args.scene, &args.showcase] {
+        let mut scene = strata::load_scene(path)?;
+        if !scene.has_light() {
+            scene.add_default_light();
+        }
+        eprint!("\r{} ...", path.display());
+        let f = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, true)?;
+        let traced = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, false)?;
+        eprint!("\r\x1b[2K");
+        let s = &f.stats;
+        let t = s.pass_times.unwrap_or_default();
+        let n = f64::from(s.samples);
+        let total = t.total_ms();
+        let rays = (s.shadow_rays + s.secondary_rays) as f64;
+        let accumulate_rays_per_s = rays / (t.accumulate_ms / 1e3);
+        let probe_rays_per_s = f.probe_rays as f64 / (f.probe_ms / 1e3);
+        let frame_bytes = s.device_bytes.saturating_sub(f.scene_bytes);
+        println!("{}:", path.display());
+        println!(
+            "  GPU ms per sample: TLAS {:.2}, G-buffer {:.2}, accumulate {:.2}; resolve {:.2} per frame",
+            t.tlas_ms / n,
+            t.gbuffer_ms / n,
+            t.accumulate_ms / n,
+            t.resolve_ms
+        );
+        println!(
+            "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 33.3%)",
+            n / (total / 1e3),
+            s.seconds,
+            100.0 * (t.tlas_ms + t.gbuffer_ms) / total
+        );
+        println!(
+            "  rays per sample {:.0} shadow + {:.0} secondary; {:.2} M shadow rays/s, {:.2} M secondary rays/s",
+            s.shadow_rays as f64 / n,
+            s.secondary_rays as f64 / n,
+            s.shadow_rays as f64 / (t.accumulate_ms / 1e3) / 1e6,
+            s.secondary_rays as f64 / (t.accumulate_ms / 1e3) / 1e6
+        );
+        println!(
+            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): {:.1}% \
+             (target >= 60%)",
+            accumulate_rays_per_s / 1e6,
+            probe_rays_per_s / 1e6,
+            f.probe_rays,
+            100.0 * accumulate_rays_per_s / probe_rays_per_s
+        );
+        let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
+        println!(
+            "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest hit), \
+             no shading: {:.2} M rays/s, {:.1}%",
+            f.replay_shadow_rays,
+            f.replay_rays - f.replay_shadow_rays,
+            replay_rays_per_s / 1e6,
+            100.0 * accumulate_rays_per_s / replay_rays_per_s
+        );
+        let traced_times = traced.stats.pass_times.unwrap_or_default();
+        println!(
+            "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \
+             raster frame's GPU time, {:.1} bytes/pixel",
+            traced_times.accumulate_ms / n,
+            traced_times.total_ms() / total,
+            traced.stats.device_bytes.saturating_sub(traced.scene_bytes) as f64 / pixels
+        );
+        println!(
+            "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}; target < 100)",
+            f.scene_bytes as f64 / 1048576.0,
+            frame_bytes as f64 / 1048576.0,
+            frame_bytes as f64 / pixels,
+            s.image_bytes as f64 / pixels
+        );
+    }
+    // Scaling: total GPU time against spp at a fixed size, and against pixels at a fixed spp.
+    let mut scene = strata::load_scene(&args.scene)?;
+    if !scene.has_light() {
+        scene.add_default_light();
+    }
+    // At the default 512x512: spp over 8-32 at 256x256, pixels over 128^2-512^2 at 8 spp.
+    let part = |divisor: u32| ((w / divisor).max(1), (h / divisor).max(1));
+    let (quarter, half) = (part(4), part(2));
+    let mut by_spp = Vec::new();
+    for spp in [8u32, 16, 32] {
+        eprint!("\rscaling: {spp} spp ...");
+        let f = time_frame(&gpu, &scene, half, spp, Primary::Raster, false)?;
+        by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
+    }
+    let mut by_pixels = Vec::new();
+    for size in [quarter, half, (w, h)] {
+        eprint!("\rscaling: {}x{} ...", size.0, size.1);
+        let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, false)?;
+        by_pixels.push((f64::from(size.0 * size.1), f.stats.pass_times.unwrap_or_default().total_ms()));
+    }
+    eprint!("\r\x1b[2K");
+    println!(
+        "scaling ({}): GPU frame time ~ spp^{:.2} (8-32 spp at {}x{}), ~ pixels^{:.2} ({}x{} to {w}x{h} at 8 spp)",
+        args.scene.display(),
+        fitted_exponent(&by_spp),
+        half.0,
+        half.1,
+        fitted_exponent(&by_pixels),
+        quarter.0,
+        quarter.1
+    );
+    Ok(())
+}
+
+fn bench_gbuffer(args: &BenchArgs, gpu: Gpu) -> Result<()> {
+    use strata::bench::{time_gbuffer, BumpSetting};
+    use strata::scene::BumpDerivative::{Analytic, CentralDifferences};
+    let cornell = strata::load_scene(&args.scene)?;
+    // About a million triangles: a UV sphere of 1000 x 500 quads with an fBm bump, framed by the default camera.
+    let mut big = strata::scene::Scene::default();
+    let mut sphere = strata::scene::shapes::uv_sphere(1.0, 1000, 500, Some(0));
+    strata::scene::surface::compute_surface_derivatives(&mut sphere);
+    big.meshes.push(strata::scene::Mesh { name: "1M sphere".into(), primitives: vec![sphere] });
+    big.materials.push(strata::scene::Material {
+        name: "fbm".into(),
+        bump: Some(strata::scene::BumpMap::default()),
+        ..Default::default()
+    });
+    big.instances.push(strata::scene::Instance {
+        name: "1M sphere".into(),
+        mesh: 0,
+        node: None,
+        world_from_object: glam::Mat4::IDENTITY,
+    });
+    println!("G-buffer pass, GPU time per sample (median of {} samples) on {}", args.samples, gpu.device.report.name);
+    println!("{:<12} {:>10} {:>10} {:<22} {:>10}", "scene", "size", "triangles", "bump", "ms/sample");
+    let cases = [
+        ("cornell", &cornell, 512, 512, BumpSetting::AsGiven),
+        ("cornell", &cornell, 1280, 720, BumpSetting::AsGiven),
+        ("1M sphere", &big, 512, 512, BumpSetting::AsGiven),
+        ("1M sphere", &big, 1280, 720, BumpSetting::AsGiven),
+        ("cornell", &cornell, 512, 512, BumpSetting::Off),
+        ("cornell", &cornell, 512, 512, BumpSetting::All(CentralDifferences)),
+        ("cornell", &cornell, 512, 512, BumpSetting::All(Analytic)),
+    ];
+    let mut figures = Vec::new();
+    for (i, (name, scene, w, h, bump)) in cases.into_iter().enumerate() {
+        eprint!("\r[{}/{}] {name} {w}x{h} ...", i + 1, cases.len());
+        let f = time_gbuffer(&gpu, name, scene, w, h, bump, args.samples)?;
+        eprint!("\r\x1b[2K");
+        println!("{:<12} {:>10} {:>10} {:<22} {:>10.3}", f.scene, format!("{w}x{h}"), f.triangles, f.bump, f.median_ms);
+        figures.push(f);
+    }
+    let (none, central, analytic) = (figures[4].median_ms, figures[5].median_ms, figures[6].median_ms);
+    println!();
+    println!("bump cost at 512x512, every material bumped (fBm, 4 octaves):");
+    println!("  central differences / analytic gradient = {:.2}x", central / analytic);
+    println!("  central differences / no bump           = {:.2}x", central / none);
+    println!("  analytic gradient / no bump             = {:.2}x", analytic / none);
+    println!(
+        "  bump work alone (pass minus the no-bump pass): central / analytic = {:.2}x ({:.2} vs {:.2} ms)",
+        (central - none) / (analytic - none).max(1e-9),
+        central - none,
+        analytic - none
+    );
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! `strata info`: the Vulkan devices, what they support, and whether strata can use them.
+use super::args::InfoArgs;
+use super::print_stdout;
+use anyhow::{bail, Context as _, Result};
+
+pub fn info(args: InfoArgs) -> Result<()> {
+    let mut text = String::new();
+    macro_rules! out {
+        ($($arg:tt)*) => {{
+            use std::fmt::Write as _;
+            let _ = writeln!(text, $($arg)*);
+        }};
+    }
+    let loader = strata::vk::instance::loader_info()?;
+    out!("Vulkan loader: {}", strata::vk::instance::version_string(loader.loader_version));
+    match &loader.validation_layer {
+        Some(layer) => out!("Validation layer: {layer}"),
+        None => out!("Validation layer: not installed (run scripts/setup.sh for vulkan-validationlayers)"),
+    }
+    print_stdout(&text);
+    text.clear();
+    let instance = strata::vk::instance::Instance::new(&strata::vk::instance::InstanceOptions {
+        validation: args.validate && loader.validation_layer.is_some(),
+        echo_messages: args.validate,
+    })
+    .context("creating a Vulkan instance")?;
+    let reports = strata::vk::device::enumerate_devices(&instance)?;
+    if reports.is_empty() {
+        print_stdout(&text);
+        bail!("no Vulkan devices found; run scripts/setup.sh to install Mesa's lavapipe");
+    }
+    let chosen = strata::vk::device::select_device(&reports, None, strata::vk::DeviceNeeds::RayQueries).ok();
+    out!("Devices:");
+    for r in &reports {
+        let marker = if Some(r.index) == chosen { " (default)" } else { "" };
+        out!("  [{}] {}{marker}", r.index, r.name);
+        out!("      type:      {}", r.type_name());
+        out!("      driver:    {} {}", r.driver_name, r.driver_info);
+        out!("      Vulkan:    {}", r.api_version_string());
+        out!("      ray query: {}", if r.ray_query { "yes" } else { "no" });
+        if r.qualifies() {
+            out!("      strata:    usable");
+        } else {
+            out!("      strata:    not usable, lacks {}", r.missing.join(", "));
+        }
+    }
+    print_stdout(&text);
+    if chosen.is_none() {
+        bail!("no device can run strata; run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query");
+    }
+    Ok(())
+}

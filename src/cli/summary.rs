@@ -1,0 +1,71 @@
+//! The end-of-render summary.
+/// The end-of-render summary, as a line for people and JSON for scripts.
+pub struct Summary {
+    pub written: Vec<String>,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub sampler: &'static str,
+    /// Where visible surfaces came from: "raster" or "rays".
+    pub primary: &'static str,
+    pub seed: u64,
+    pub seconds: f64,
+    pub stats: Option<strata::render::frame::FrameStats>,
+    pub device: String,
+    pub triangles: usize,
+    pub instances: usize,
+}
+
+impl Summary {
+    /// (camera rays, shadow rays, secondary rays).
+    fn rays(&self) -> (u64, u64, u64) {
+        self.stats.as_ref().map(|s| (s.camera_rays, s.shadow_rays, s.secondary_rays)).unwrap_or((0, 0, 0))
+    }
+
+    pub fn line(&self) -> String {
+        let (camera, shadow, secondary) = self.rays();
+        let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
+        let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
+        format!(
+            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+             {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
+            self.written.join(" and "),
+            self.width,
+            self.height,
+            self.spp,
+            self.sampler,
+            self.primary,
+            self.triangles,
+            self.device,
+            self.seconds,
+            f64::from(self.spp) / render_seconds,
+            (camera + shadow + secondary) as f64 / render_seconds / 1e6,
+            shadow,
+            secondary
+        )
+    }
+
+    pub fn json(&self) -> serde_json::Value {
+        let (camera, shadow, secondary) = self.rays();
+        let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
+        serde_json::json!({
+            "outputs": self.written,
+            "width": self.width,
+            "height": self.height,
+            "spp": self.spp,
+            "sampler": self.sampler,
+            "primary": self.primary,
+            "seed": self.seed,
+            "seconds": self.seconds,
+            "render_seconds": render_seconds,
+            "samples_per_second": f64::from(self.spp) / render_seconds,
+            "camera_rays": camera,
+            "shadow_rays": shadow,
+            "secondary_rays": secondary,
+            "rays_per_second": (camera + shadow + secondary) as f64 / render_seconds,
+            "device": self.device,
+            "triangles": self.triangles,
+            "instances": self.instances,
+        })
+    }
+}
