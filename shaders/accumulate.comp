@@ -65,16 +65,6 @@ TriangleHit triangle_hit(int record, uint tri, vec2 bc) {
     return h;
 }
 
-vec2 hit_uv(TriangleHit h) {
-    Vec2Array uvs = Vec2Array(h.r.uvs);
-    return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
-}
-
-vec2 hit_uv1(TriangleHit h) {
-    Vec2Array uvs = Vec2Array(h.r.uvs1);
-    return h.w.x * uvs.v[h.i0] + h.w.y * uvs.v[h.i1] + h.w.z * uvs.v[h.i2];
-}
-
 // A hit's coordinates in one UV set (x, y) and twice its triangle's area in that set (z).
 vec3 hit_uv_and_area(uint64_t set, TriangleHit h) {
     Vec2Array uvs = Vec2Array(set);
@@ -84,6 +74,28 @@ vec3 hit_uv_and_area(uint64_t set, TriangleHit h) {
     vec2 e1 = b - a;
     vec2 e2 = c - a;
     return vec3(h.w.x * a + h.w.y * b + h.w.z * c, abs(e1.x * e2.y - e1.y * e2.x));
+}
+
+// Ray cones for texture filtering at ray hits (Akenine-Möller et al., "Texture Level of Detail Strategies for
+// Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20): a ray carries its pixel's footprint as a width at its
+// origin and a spread angle, so a hit reads the mip level a direct view of the same footprint would. Reflection
+// and refraction keep the spread (the surface's curvature is not known here), and a rough lobe adds nothing: its
+// spread is what the chain's samples integrate.
+//
+// The camera's pixel cone as (width at the eye, spread): a perspective pixel subtends α = 2·tan(fov_y/2)/height at
+// the image's centre (§20.3.4); an orthographic one keeps its width.
+vec2 pixel_cone() {
+    GpuCamera c = cameras[pc.counter_slot];
+    float pixel = 2.0 * c.lens.y / float(pc.height);
+    return c.range.z != 0.0 ? vec2(pixel, 0.0) : vec2(0.0, pixel);
+}
+
+// A cone's footprint on a triangle in a UV set's units, as a level of detail: log2 of its width along the surface,
+// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (eq. 34 without the texture's own
+// size, which texture_lod adds). Twice each area is given; the factors cancel.
+float footprint_lod(float width_along_surface, float uv_area2, float world_area2) {
+    float uv_per_world = uv_area2 / max(world_area2, 1e-30);
+    return 0.5 * log2(max(width_along_surface * width_along_surface * uv_per_world, 1e-30));
 }
 
 // Whether any texture the hit shading reads takes TEXCOORD_1 (normal textures read TEXCOORD_0).
@@ -99,33 +111,48 @@ vec4 hit_color(TriangleHit h) {
 }
 
 // Whether an alpha-tested material covers a point with this vertex colour alpha and these UVs: the rule of
-// gbuffer.frag's discard (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND).
-bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1) {
+// gbuffer.frag's discard (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND),
+// the texture read at level of detail `lod`.
+bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1, float lod) {
     float alpha = m.base_color.a * vertex_alpha;
     if (m.base_color_texture >= 0) {
-        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv0, uv1), 0.0).a;
+        alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv0, uv1), lod).a;
     }
     return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
 }
 
-// Whether a candidate triangle of alpha-tested geometry covers its point.
-bool alpha_covers(rayQueryEXT q) {
+// Whether a candidate triangle of alpha-tested geometry covers its point, its texture read through the ray's cone
+// (width at the origin, spread) as hit_surface reads textures, so a minified cut-out is as covered as the raster
+// pass's mip-filtered view of it. Shadow rays carry no pixel footprint: a zero cone reads level 0.
+bool alpha_covers(rayQueryEXT q, vec2 cone) {
     TriangleHit h = triangle_hit(
         rayQueryGetIntersectionInstanceCustomIndexEXT(q, false) + rayQueryGetIntersectionGeometryIndexEXT(q, false),
         uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)), rayQueryGetIntersectionBarycentricsEXT(q, false));
     GpuMaterial m = materials[h.r.material];
-    vec2 uv0 = hit_uv(h);
-    return material_covers(m, hit_color(h).a, uv0, reads_uv1(m.base_color_uv_rows) ? hit_uv1(h) : uv0);
+    vec3 uv_area = hit_uv_and_area(reads_uv1(m.base_color_uv_rows) ? h.r.uvs1 : h.r.uvs, h);
+    float lod = 0.0;
+    if (m.base_color_texture >= 0 && cone != vec2(0.0)) {
+        Vec3Array positions = Vec3Array(h.r.positions);
+        vec3 p0 = positions.v[h.i0];
+        mat3 m3 = mat3(rayQueryGetIntersectionObjectToWorldEXT(q, false));
+        vec3 ng = cross(m3 * (positions.v[h.i1] - p0), m3 * (positions.v[h.i2] - p0));  // twice the world area
+        float world_area2 = length(ng);
+        float cos_d = abs(dot(ng, rayQueryGetWorldRayDirectionEXT(q))) / max(world_area2, 1e-30);
+        float width = cone.x + cone.y * rayQueryGetIntersectionTEXT(q, false);
+        lod = texture_lod(m.base_color_uv_rows, vec2(footprint_lod(width / max(cos_d, 1e-3), uv_area.z, world_area2)));
+    }
+    return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod);
 }
 
 // The flags every ray query starts with, besides its own.
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
 
-// Runs a ray query to its end, confirming the candidate triangles of alpha-tested geometry that cover their point.
-void run_query(rayQueryEXT q) {
+// Runs a ray query to its end, confirming the candidate triangles of alpha-tested geometry that cover their point
+// (read through the ray's cone, alpha_covers).
+void run_query(rayQueryEXT q, vec2 cone) {
     while (rayQueryProceedEXT(q)) {
-        if (ALPHA_TESTED != 0u &&
-            rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT && alpha_covers(q)) {
+        if (ALPHA_TESTED != 0u && rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT &&
+            alpha_covers(q, cone)) {
             rayQueryConfirmIntersectionEXT(q);
         }
     }
@@ -183,28 +210,6 @@ float sample1(uint pixel, uint dim) {
     return sample_1d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
 }
 
-// Ray cones for texture filtering at ray hits (Akenine-Möller et al., "Texture Level of Detail Strategies for
-// Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20): a ray carries its pixel's footprint as a width at its
-// origin and a spread angle, so a hit reads the mip level a direct view of the same footprint would. Reflection
-// and refraction keep the spread (the surface's curvature is not known here), and a rough lobe adds nothing: its
-// spread is what the chain's samples integrate.
-//
-// The camera's pixel cone as (width at the eye, spread): a perspective pixel subtends α = 2·tan(fov_y/2)/height at
-// the image's centre (§20.3.4); an orthographic one keeps its width.
-vec2 pixel_cone() {
-    GpuCamera c = cameras[pc.counter_slot];
-    float pixel = 2.0 * c.lens.y / float(pc.height);
-    return c.range.z != 0.0 ? vec2(pixel, 0.0) : vec2(0.0, pixel);
-}
-
-// A cone's footprint on a triangle in a UV set's units, as a level of detail: log2 of its width along the surface,
-// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (eq. 34 without the texture's own
-// size, which texture_lod adds). Twice each area is given; the factors cancel.
-float footprint_lod(float width_along_surface, float uv_area2, float world_area2) {
-    float uv_per_world = uv_area2 / max(world_area2, 1e-30);
-    return 0.5 * log2(max(width_along_surface * width_along_surface * uv_per_world, 1e-30));
-}
-
 // A ray origin just off the surface on the side the ray leaves towards (scaled to the position's magnitude).
 vec3 offset_origin(vec3 p, vec3 ng, vec3 dir) {
     float eps = 1e-4 * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
@@ -216,7 +221,7 @@ bool occluded(vec3 o, vec3 d, float t_max) {
     log_ray(gl_RayFlagsTerminateOnFirstHitEXT, o, 0.0, d, t_max);
     rayQueryEXT q;
     rayQueryInitializeEXT(q, tlas, TRACE_FLAGS | gl_RayFlagsTerminateOnFirstHitEXT, 0xFF, o, 0.0, d, t_max);
-    run_query(q);
+    run_query(q, vec2(0.0));
     return rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionNoneEXT;
 }
 
@@ -245,7 +250,7 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
         vec3 w = vec3(1.0 - ls.bary.x - ls.bary.y, ls.bary);
         vec2 uv0 = w.x * l.uv01.xy + w.y * l.uv01.zw + w.z * l.uv2_material.xy;
         vec2 uv1 = w.x * l.uv1_01.xy + w.y * l.uv1_01.zw + w.z * l.uv1_2.xy;
-        if (ALPHA_TESTED != 0u && m.alpha_mode != 0 && !material_covers(m, dot(w, l.corner_alpha.xyz), uv0, uv1)) {
+        if (ALPHA_TESTED != 0u && m.alpha_mode != 0 && !material_covers(m, dot(w, l.corner_alpha.xyz), uv0, uv1, 0.0)) {
             return vec3(0.0);
         }
         if (m.emissive_texture >= 0) {
@@ -479,7 +484,7 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         log_ray(0u, r.origin, 0.0, r.dir, 1e30);
         rayQueryEXT q;
         rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, r.origin, 0.0, r.dir, 1e30);
-        run_query(q);
+        run_query(q, r.cone);
         bool hit = rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT;
         float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
         float light_density;
@@ -568,7 +573,7 @@ void main() {
             log_ray(0u, o, t_range.x, d, t_range.y);
             rayQueryEXT q;
             rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, o, t_range.x, d, t_range.y);
-            run_query(q);
+            run_query(q, r.cone);
             if (rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionTriangleEXT) {
                 r.cone.x += r.cone.y * rayQueryGetIntersectionTEXT(q, true);
                 Surface s = hit_surface(q, -d, r.cone.x, true);
