@@ -79,11 +79,12 @@ vec3 hit_uv_and_area(uint64_t set, TriangleHit h) {
 // Ray cones for texture filtering at ray hits (Akenine-Möller et al., "Texture Level of Detail Strategies for
 // Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20): a ray carries its pixel's footprint as a width at its
 // origin and a spread angle, so a hit reads the mip level a direct view of the same footprint would. Reflection
-// and refraction keep the spread (the surface's curvature is not known here), and a rough lobe adds nothing: its
-// spread is what the chain's samples integrate.
+// and refraction keep the spread (the surface's curvature is not known here; Boksansky et al., "Refraction Ray
+// Cones for Texture Level of Detail", Ray Tracing Gems II, 2021, ch. 10, bend it at interfaces), and a rough lobe
+// adds nothing: its spread is what the chain's samples integrate.
 //
 // The camera's pixel cone as (width at the eye, spread): a perspective pixel subtends α = 2·tan(fov_y/2)/height at
-// the image's centre (§20.3.4); an orthographic one keeps its width.
+// the image's centre (the small-angle form of the chapter's pixel spread angle); an orthographic one keeps its width.
 vec2 pixel_cone() {
     GpuCamera c = cameras[pc.counter_slot];
     float pixel = 2.0 * c.lens.y / float(pc.height);
@@ -91,8 +92,8 @@ vec2 pixel_cone() {
 }
 
 // A cone's footprint on a triangle in a UV set's units, as a level of detail: log2 of its width along the surface,
-// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (eq. 34 without the texture's own
-// size, which texture_lod adds). Twice each area is given; the factors cancel.
+// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (the chapter's triangle LOD term
+// without the texture's own size, which texture_lod adds). Twice each area is given; the factors cancel.
 float footprint_lod(float width_along_surface, float uv_area2, float world_area2) {
     float uv_per_world = uv_area2 / max(world_area2, 1e-30);
     return 0.5 * log2(max(width_along_surface * width_along_surface * uv_per_world, 1e-30));

@@ -215,8 +215,9 @@ impl GpuMaterial {
 
 /// The level of detail a texture adds to a footprint measured in its UV set: ½·log2(width · height · |det A|),
 /// the log2 of texels per unit of UV length through the transform A (Akenine-Möller et al., "Texture Level of
-/// Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20, eq. 34's Δ with the texture's
-/// size and A's area scale moved out of the triangle term). Clamped, so a degenerate transform reads level 0.
+/// Detail Strategies for Real-Time Ray Tracing", Ray Tracing Gems, 2019, ch. 20: the texture's share of the
+/// ray cone's level of detail, its size and A's area scale taken out of the triangle term). Clamped, so a
+/// degenerate transform reads level 0.
 pub fn texel_lod_offset((width, height): (u32, u32), uv_transform: Mat3) -> f32 {
     let a = uv_transform.x_axis.x * uv_transform.y_axis.y - uv_transform.y_axis.x * uv_transform.x_axis.y;
     let texels_per_uv_area = width as f32 * height as f32 * a.abs();
