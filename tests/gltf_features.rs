@@ -1,6 +1,6 @@
 //! glTF features the shared samples do not exercise, on small files written here: a GLB with a binary chunk,
-//! sparse accessors, normalized integer attributes, the KHR extensions strata implements, alpha modes, and the
-//! warning for an optional extension it does not.
+//! sparse accessors, normalized integer attributes, the KHR extensions strata implements, alpha modes, morph
+//! targets at the mesh's and nodes' weights, and the warnings for an optional extension and skins it does not.
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::{json, Value};
 use strata::scene::{AlphaMode, LightShape};
@@ -205,4 +205,68 @@ fn gltf_with_an_external_buffer_and_every_feature() {
     let path = dir.join("features.gltf");
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     check(&strata::load_scene(&path).unwrap());
+}
+
+/// A triangle with one morph target (vertex 2 moves by +z, every normal tilts by +x), at the mesh's default
+/// weight 0.5 on node 0, at weight 1 on node 1 and at 0.5 again on node 2; node 3 is skinned.
+fn morphed_triangles() -> (Value, Vec<u8>) {
+    let mut bin = bytes_f32(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]); // positions
+    bin.extend(bytes_f32(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0])); // normals
+    bin.extend(bytes_f32(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])); // target POSITION
+    bin.extend(bytes_f32(&[1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0])); // target NORMAL
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "nodes": [{"mesh": 0}, {"mesh": 0, "weights": [1.0]}, {"mesh": 0, "weights": [0.5]},
+                  {"mesh": 0, "skin": 0}],
+        "skins": [{"joints": [0]}],
+        "meshes": [{"weights": [0.5], "primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1},
+                                                      "targets": [{"POSITION": 2, "NORMAL": 3}]}]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": (0..4).map(|i| json!({"buffer": 0, "byteOffset": 36 * i, "byteLength": 36})).collect::<Vec<_>>(),
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 1]},
+            {"bufferView": 3, "componentType": 5126, "count": 3, "type": "VEC3"}
+        ]
+    });
+    (doc, bin)
+}
+
+/// Morph targets apply at the mesh's default weights, or at a node's own (glTF 2.0 §3.7.2.2), nodes with the same
+/// weights sharing one mesh; a skinned node gets a warning.
+#[test]
+fn morph_targets_apply_at_the_mesh_or_node_weights() {
+    let (doc, bin) = morphed_triangles();
+    let path = temp_dir("morph").join("morph.glb");
+    std::fs::write(&path, glb(&doc, &bin)).unwrap();
+    let scene = strata::load_scene(&path).unwrap();
+    let mesh_of = |node: usize| scene.nodes[node].mesh.expect("a mesh");
+    assert_eq!(mesh_of(0), 0);
+    assert_eq!(mesh_of(2), 0, "weights equal to the mesh's share its mesh");
+    assert_eq!(mesh_of(3), 0);
+    assert_ne!(mesh_of(1), 0, "node 1's own weights need a mesh of their own");
+    assert_eq!(scene.meshes.len(), 2);
+    assert_eq!(scene.instances.len(), 4);
+    let half = &scene.meshes[0].primitives[0];
+    assert_eq!(half.positions, vec![Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 0.5)]);
+    let tilted = Vec3::new(0.5, 0.0, 1.0).normalize();
+    assert!(half.normals.iter().all(|n| n.abs_diff_eq(tilted, 1e-6)), "{:?}", half.normals);
+    let full = &scene.meshes[mesh_of(1)].primitives[0];
+    assert_eq!(full.positions, vec![Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 1.0)]);
+    assert!(full.normals.iter().all(|n| n.abs_diff_eq(Vec3::new(1.0, 0.0, 1.0).normalize(), 1e-6)));
+    assert!(scene.warnings.iter().any(|w| w.contains("node 3 is skinned")), "{:?}", scene.warnings);
+    assert_eq!(scene.warnings.len(), 1, "{:?}", scene.warnings);
+}
+
+/// A morph target whose accessor has the wrong count fails with the mesh, the primitive and the target named.
+#[test]
+fn a_morph_target_of_the_wrong_length_is_an_error() {
+    let (mut doc, bin) = morphed_triangles();
+    doc["accessors"][2]["count"] = json!(2);
+    let path = temp_dir("bad-morph").join("morph.glb");
+    std::fs::write(&path, glb(&doc, &bin)).unwrap();
+    let error = format!("{:#}", strata::load_scene(&path).unwrap_err());
+    assert!(error.contains("mesh 0") && error.contains("morph target 0 POSITION"), "{error}");
 }

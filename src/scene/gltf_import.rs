@@ -69,16 +69,10 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     mark_color_textures(&mut scene);
     warn_about_unread_uv_sets(&mut scene);
     for mesh in document.meshes() {
-        let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
-        let mut primitives = Vec::new();
-        for (p_index, primitive) in mesh.primitives().enumerate() {
-            let p = import_primitive(&primitive, &buffers)
-                .with_context(|| format!("mesh \"{name}\", primitive {p_index}"))?;
-            primitives.push(p);
-        }
-        scene.meshes.push(Mesh { name, primitives });
+        scene.meshes.push(import_mesh(&mesh, &buffers, mesh.weights().unwrap_or(&[]))?);
     }
-    import_nodes(document, &mut scene)?;
+    let node_meshes = meshes_at_node_weights(document, &buffers, &mut scene)?;
+    import_nodes(document, &mut scene, &node_meshes)?;
     for animation in document.animations() {
         let a = import_animation(&animation, &buffers, &scene)
             .with_context(|| format!("animation {}", animation.index()))?;
@@ -96,7 +90,60 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
         })
         .collect();
     scene.warnings.extend(unsupported_channels);
+    for node in document.nodes().filter(|n| n.skin().is_some() && n.mesh().is_some()) {
+        scene.warnings.push(format!(
+            "node {} is skinned, which strata does not support: its mesh is drawn unskinned, as the node places it",
+            node.index()
+        ));
+    }
     Ok(scene)
+}
+
+fn import_mesh(mesh: &gltf::Mesh<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Mesh> {
+    let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+    let mut primitives = Vec::new();
+    for (p_index, primitive) in mesh.primitives().enumerate() {
+        let p = import_primitive(&primitive, buffers, weights)
+            .with_context(|| format!("mesh \"{name}\", primitive {p_index}"))?;
+        primitives.push(p);
+    }
+    Ok(Mesh { name, primitives })
+}
+
+/// The mesh each node draws: its glTF mesh, or, where the node gives morph target weights of its own (glTF 2.0
+/// §3.7.2.2: they replace the mesh's), a copy of that mesh at those weights, one per distinct set.
+fn meshes_at_node_weights(
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+) -> Result<Vec<Option<usize>>> {
+    let mut copies: Vec<(usize, Vec<u32>, usize)> = Vec::new();
+    let mut node_meshes = Vec::new();
+    for node in document.nodes() {
+        let mesh = node.mesh();
+        let own = match (&mesh, node.weights()) {
+            (Some(mesh), Some(weights)) if weights != mesh.weights().unwrap_or(&[]) => Some((mesh, weights)),
+            _ => None,
+        };
+        let Some((mesh, weights)) = own else {
+            node_meshes.push(mesh.map(|m| m.index()));
+            continue;
+        };
+        let bits: Vec<u32> = weights.iter().map(|w| w.to_bits()).collect();
+        let index = match copies.iter().find(|(m, b, _)| *m == mesh.index() && *b == bits) {
+            Some(&(_, _, index)) => index,
+            None => {
+                let mut copy = import_mesh(mesh, buffers, weights)
+                    .with_context(|| format!("node {} (its own morph target weights)", node.index()))?;
+                copy.name = format!("{} (node {} weights)", copy.name, node.index());
+                scene.meshes.push(copy);
+                copies.push((mesh.index(), bits, scene.meshes.len() - 1));
+                scene.meshes.len() - 1
+            }
+        };
+        node_meshes.push(Some(index));
+    }
+    Ok(node_meshes)
 }
 
 /// Parses and validates with the gltf crate, guarding against its validation code panicking on malformed input.
@@ -410,7 +457,8 @@ fn mark_color_textures(scene: &mut Scene) {
     }
 }
 
-fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>]) -> Result<Primitive> {
+/// One primitive, its morph targets applied at `weights` (the mesh's or a node's).
+fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Primitive> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         bail!("mode {:?} is not supported (only TRIANGLES)", primitive.mode());
     }
@@ -482,11 +530,70 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>]) -> Res
     if p.uvs.iter().chain(&p.uvs1).any(|uv| !uv.is_finite()) {
         bail!("texture coordinates hold non-finite values");
     }
+    apply_morph_targets(primitive, buffers, weights, &mut p)?;
     if p.normals.is_empty() {
         flatten_with_face_normals(&mut p);
     }
     compute_surface_derivatives(&mut p);
     Ok(p)
+}
+
+/// Adds each morph target's displacements of POSITION, NORMAL and TANGENT, times its weight, to the base
+/// attributes (glTF 2.0 §3.7.2.2); normals are renormalized. Weights past the list count as 0.
+fn apply_morph_targets(
+    primitive: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    weights: &[f32],
+    p: &mut Primitive,
+) -> Result<()> {
+    use gltf::accessor::{DataType, Dimensions};
+    let weight = |t: usize| weights.get(t).copied().unwrap_or(0.0);
+    if let Some(t) = (0..weights.len()).find(|&t| !weight(t).is_finite()) {
+        bail!("morph target {t}: weight {} is not finite", weight(t));
+    }
+    if (0..primitive.morph_targets().len()).all(|t| weight(t) == 0.0) {
+        return Ok(());
+    }
+    // Every target's accessors are checked before the reader touches any: it slices buffers unchecked.
+    for (t, target) in primitive.morph_targets().enumerate() {
+        for (name, accessor) in
+            [("POSITION", target.positions()), ("NORMAL", target.normals()), ("TANGENT", target.tangents())]
+        {
+            let Some(accessor) = accessor else { continue };
+            let what = format!("morph target {t} {name}");
+            check_format(&what, &accessor, &[Dimensions::Vec3], &[(DataType::F32, false)])?;
+            check_accessor(&accessor, buffers).with_context(|| what.clone())?;
+            if accessor.count() != p.positions.len() {
+                bail!("{what} has {} entries for {} vertices", accessor.count(), p.positions.len());
+            }
+        }
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    for (t, (positions, normals, tangents)) in reader.read_morph_targets().enumerate() {
+        let w = weight(t);
+        if w == 0.0 {
+            continue;
+        }
+        let deltas = |values: Option<gltf::accessor::Iter<'_, [f32; 3]>>| -> Vec<Vec3> {
+            values.map(|i| i.map(|d| w * Vec3::from_array(d)).collect()).unwrap_or_default()
+        };
+        for (v, d) in p.positions.iter_mut().zip(deltas(positions)) {
+            *v += d;
+        }
+        for (n, d) in p.normals.iter_mut().zip(deltas(normals)) {
+            *n += d;
+        }
+        for (tangent, d) in p.tangents.iter_mut().zip(deltas(tangents)) {
+            *tangent += d.extend(0.0);
+        }
+    }
+    if p.positions.iter().chain(&p.normals).any(|v| !v.is_finite()) || p.tangents.iter().any(|t| !t.is_finite()) {
+        bail!("morph targets move vertex attributes to non-finite values");
+    }
+    for n in &mut p.normals {
+        *n = n.normalize_or_zero();
+    }
+    Ok(())
 }
 
 /// Without NORMAL, glTF asks for flat normals (§3.7.2.1): give every triangle its own three vertices.
@@ -528,7 +635,8 @@ fn node_transform(node: &gltf::Node<'_>) -> NodeTransform {
     }
 }
 
-fn import_nodes(document: &gltf::Document, scene: &mut Scene) -> Result<()> {
+/// `node_meshes`: the mesh each node draws (meshes_at_node_weights).
+fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Option<usize>]) -> Result<()> {
     scene.nodes = document
         .nodes()
         .map(|n| Node {
@@ -536,7 +644,7 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene) -> Result<()> {
             parent: None,
             children: n.children().map(|c| c.index()).collect(),
             transform: node_transform(&n),
-            mesh: n.mesh().map(|m| m.index()),
+            mesh: node_meshes.get(n.index()).copied().flatten(),
             camera: None,
             light: None,
         })
