@@ -91,10 +91,15 @@ vec2 pixel_cone() {
     return c.range.z != 0.0 ? vec2(pixel, 0.0) : vec2(0.0, pixel);
 }
 
-// A cone's footprint on a triangle in a UV set's units, as a level of detail: log2 of its width along the surface,
-// w / |n·d|, times the UV length per unit of surface length, √(A_uv / A_world) (the chapter's triangle LOD term
-// without the texture's own size, which texture_lod adds). Twice each area is given; the factors cancel.
-float footprint_lod(float width_along_surface, float uv_area2, float world_area2) {
+// A cone of width `cone_width` meeting a triangle along `dir`, its footprint in a UV set's units as a level of
+// detail: log2 of its width along the surface, w / |n·d|, times the UV length per unit of surface length,
+// √(A_uv / A_world) (the chapter's triangle LOD term without the texture's own size, which texture_lod adds).
+// `world_edges` is the cross product of the triangle's world-space edges (twice its area along its normal);
+// `uv_area2` is twice its area in the UV set. The factors of two cancel.
+float footprint_lod(float cone_width, vec3 world_edges, vec3 dir, float uv_area2) {
+    float world_area2 = length(world_edges);
+    float cos_d = abs(dot(world_edges, dir)) / max(world_area2, 1e-30);
+    float width_along_surface = cone_width / max(cos_d, 1e-3);
     float uv_per_world = uv_area2 / max(world_area2, 1e-30);
     return 0.5 * log2(max(width_along_surface * width_along_surface * uv_per_world, 1e-30));
 }
@@ -136,11 +141,10 @@ bool alpha_covers(rayQueryEXT q, vec2 cone) {
         Vec3Array positions = Vec3Array(h.r.positions);
         vec3 p0 = positions.v[h.i0];
         mat3 m3 = mat3(rayQueryGetIntersectionObjectToWorldEXT(q, false));
-        vec3 ng = cross(m3 * (positions.v[h.i1] - p0), m3 * (positions.v[h.i2] - p0));  // twice the world area
-        float world_area2 = length(ng);
-        float cos_d = abs(dot(ng, rayQueryGetWorldRayDirectionEXT(q))) / max(world_area2, 1e-30);
+        vec3 world_edges = cross(m3 * (positions.v[h.i1] - p0), m3 * (positions.v[h.i2] - p0));
         float width = cone.x + cone.y * rayQueryGetIntersectionTEXT(q, false);
-        lod = texture_lod(m.base_color_uv_rows, vec2(footprint_lod(width / max(cos_d, 1e-3), uv_area.z, world_area2)));
+        float footprint = footprint_lod(width, world_edges, rayQueryGetWorldRayDirectionEXT(q), uv_area.z);
+        lod = texture_lod(m.base_color_uv_rows, vec2(footprint));
     }
     return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod);
 }
@@ -328,7 +332,7 @@ Surface hit_surface(rayQueryEXT q, vec3 v, float cone_width, const bool visible)
     float det_sign = dot(m3[0], cross(m3[1], m3[2])) < 0.0 ? -1.0 : 1.0;
     Surface s;
     s.position = world_from_object * vec4(h.w.x * p0 + h.w.y * p1 + h.w.z * p2, 1.0);
-    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));  // (M·e1) × (M·e2): twice the world area
+    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));  // ±(M·e1) × (M·e2): footprint_lod's world_edges
     s.geometric = normalize(ng);
     vec3 ns = det_sign * (cofactor * n_object);
     s.normal = dot(ns, ns) > 0.0 ? normalize(ns) : s.geometric;
@@ -338,10 +342,7 @@ Surface hit_surface(rayQueryEXT q, vec3 v, float cone_width, const bool visible)
     vec3 uv1_area = any_texture_reads_uv1(m) ? hit_uv_and_area(h.r.uvs1, h) : uv_area;
     vec2 uv1 = uv1_area.xy;
     // The cone's footprint in each UV set; texture_lod adds each texture's own density.
-    float world_area2 = length(ng);
-    float along_surface = cone_width / max(abs(dot(s.geometric, v)), 1e-3);
-    vec2 lod = vec2(footprint_lod(along_surface, uv_area.z, world_area2),
-                    footprint_lod(along_surface, uv1_area.z, world_area2));
+    vec2 lod = vec2(footprint_lod(cone_width, ng, v, uv_area.z), footprint_lod(cone_width, ng, v, uv1_area.z));
     vec4 base = m.base_color * hit_color(h);
     if (m.base_color_texture >= 0) {
         base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1),
