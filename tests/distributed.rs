@@ -6,6 +6,7 @@ mod common;
 use common::scenes::*;
 use common::GpuTest;
 use glam::{Mat4, Vec2, Vec3};
+use strata::render::frame::RenderedFrame;
 use strata::scene::camera::{look_at, Lens};
 use strata::scene::settings::{Primary, RenderSettings, SamplerKind};
 use strata::scene::{Camera, Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
@@ -679,31 +680,18 @@ fn mirrored_ceiling(detail: CeilingDetail, through_mirror: bool) -> Scene {
             scene.materials[ceiling].normal_texture = Some(TextureRef { texture: 0, tex_coord: 0, transform: None });
         }
         CeilingDetail::MinifiedTexture => {
-            use strata::scene::UvTransform;
-            let texel = |i: u32, j: u32| match ((i / 24) % 2 == 0, (i + j) % 2 == 0) {
+            let grey = |i: u32, j: u32| match ((i / 24) % 2 == 0, (i + j) % 2 == 0) {
                 (true, true) => 250u8,
                 (true, false) => 150,
                 (false, true) => 110,
                 (false, false) => 20,
             };
-            let rgba8 = (0..48).flat_map(|j| (0..48).flat_map(move |i| [texel(i, j), texel(i, j), texel(i, j), 255]));
-            scene.images = vec![TextureImage { name: "stripes".into(), width: 48, height: 48, rgba8: rgba8.collect() }];
-            scene.textures =
-                vec![Texture { name: "stripes".into(), image: 0, sampler: Sampler::default(), srgb: true }];
-            let tiled = UvTransform { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::splat(8.0) };
-            scene.materials[ceiling].base_color_texture =
-                Some(TextureRef { texture: 0, tex_coord: 0, transform: Some(tiled) });
+            tile_base_colour(&mut scene, ceiling, "stripes", |i, j| [grey(i, j), grey(i, j), grey(i, j), 255]);
         }
         CeilingDetail::MinifiedCutout => {
-            use strata::scene::{AlphaMode, UvTransform};
             let alpha = |i: u32, j: u32| if i % 2 == 0 && j % 2 == 0 { 0u8 } else { 255 };
-            let rgba8 = (0..48).flat_map(|j| (0..48).flat_map(move |i| [200, 200, 200, alpha(i, j)]));
-            scene.images = vec![TextureImage { name: "holes".into(), width: 48, height: 48, rgba8: rgba8.collect() }];
-            scene.textures = vec![Texture { name: "holes".into(), image: 0, sampler: Sampler::default(), srgb: true }];
-            let tiled = UvTransform { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::splat(8.0) };
-            scene.materials[ceiling].base_color_texture =
-                Some(TextureRef { texture: 0, tex_coord: 0, transform: Some(tiled) });
-            scene.materials[ceiling].alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+            tile_base_colour(&mut scene, ceiling, "holes", |i, j| [200, 200, 200, alpha(i, j)]);
+            scene.materials[ceiling].alpha_mode = strata::scene::AlphaMode::Mask { cutoff: 0.5 };
         }
     }
     let (mut p, m) = plane_at(Vec2::splat(4.0), Vec3::new(0.0, 2.0, 0.0), true, ceiling);
@@ -731,6 +719,19 @@ fn mirrored_ceiling(detail: CeilingDetail, through_mirror: bool) -> Scene {
         });
     }
     scene
+}
+
+/// Gives `material` a 48×48 sRGB base-colour texture of `texel(i, j)`, tiled 8 times each way (KHR_texture_transform
+/// scale 8): on the 4 m ceiling, 96 texels per metre.
+fn tile_base_colour(scene: &mut Scene, material: usize, name: &str, texel: impl Fn(u32, u32) -> [u8; 4]) {
+    use strata::scene::{Sampler, Texture, TextureImage, TextureRef, UvTransform};
+    let rgba8 = (0..48).flat_map(|j| (0..48).map(move |i| (i, j))).flat_map(|(i, j)| texel(i, j)).collect();
+    scene.images.push(TextureImage { name: name.into(), width: 48, height: 48, rgba8 });
+    let image = scene.images.len() - 1;
+    scene.textures.push(Texture { name: name.into(), image, sampler: Sampler::default(), srgb: true });
+    let tiled = UvTransform { offset: Vec2::ZERO, rotation: 0.0, scale: Vec2::splat(8.0) };
+    let texture = scene.textures.len() - 1;
+    scene.materials[material].base_color_texture = Some(TextureRef { texture, tex_coord: 0, transform: Some(tiled) });
 }
 
 /// Gloss rays shade what they hit as the raster pass shades what the camera sees: a white mirror (metal,
@@ -771,12 +772,12 @@ fn mirrors_and_primary_rays_filter_a_minified_texture_as_the_raster_pass_does() 
             }
             scene
         };
-        let direct = render(gpu.device(), &scene(false), &s).linear;
-        let mirrored = render(gpu.device(), &scene(true), &s).linear;
-        let direct_traced = render(gpu.device(), &scene(false), &traced).linear;
+        let direct = render(gpu.device(), &scene(false), &s);
+        let mirrored = render(gpu.device(), &scene(true), &s);
+        let direct_traced = render(gpu.device(), &scene(false), &traced);
         let mut glazed = scene(false);
         add_clear_pane(&mut glazed);
-        let through_glass = render(gpu.device(), &glazed, &s).linear;
+        let through_glass = render(gpu.device(), &glazed, &s);
         assert_filters_alike(&direct, &mirrored, true, &format!("mirror, perspective {perspective}"));
         assert_filters_alike(&direct, &through_glass, true, &format!("glass, perspective {perspective}"));
         // Each traced pixel has its own sub-pixel point where the raster pass shifts the whole image by one, so at
@@ -798,10 +799,7 @@ fn mirrors_and_primary_rays_see_a_minified_cutout_as_covered_as_the_raster_pass_
         [("raster", false, &raster), ("mirror", true, &raster), ("primary rays", false, &traced)]
     {
         let image = render(gpu.device(), &mirrored_ceiling(CeilingDetail::MinifiedCutout, through_mirror), s).linear;
-        let reds: Vec<f32> = (0..image.height)
-            .flat_map(|y| (0..image.width).map(move |x| (x, y)))
-            .map(|(x, y)| image.pixel(x, y)[0])
-            .collect();
+        let reds: Vec<f32> = image.pixels.iter().map(|p| p[0]).collect();
         let mean = reds.iter().sum::<f32>() / reds.len() as f32;
         // The side light leaves the far side of the ceiling at about a third of the mean; a hole shows the black sky.
         let holes = reds.iter().filter(|&&r| r < 0.1 * mean).count();
@@ -811,7 +809,6 @@ fn mirrors_and_primary_rays_see_a_minified_cutout_as_covered_as_the_raster_pass_
     gpu.finish().unwrap();
 }
 
-/// `other` shows CeilingDetail::MinifiedTexture's stripes filtered as `direct`, the raster pass's view, does.
 /// A smooth glass pane of IOR 1 (it refracts straight on and reflects nothing) between the direct view's camera
 /// and the ceiling, at y = 1.2: wide enough for either camera's view, and clear of the shadow rays from the ceiling
 /// to the side light, which cross y = 1.2 beyond x = 2.2.
@@ -829,15 +826,12 @@ fn add_clear_pane(scene: &mut Scene) {
     place(scene, "pane", p, m);
 }
 
-/// With `columns`, also the stripes' edges: `other` must sample each image row at the raster pass's sub-pixel point.
-fn assert_filters_alike(direct: &strata::output::Frame, other: &strata::output::Frame, columns: bool, what: &str) {
-    let (width, height) = (direct.width, direct.height);
-    let profile_of = |image: &strata::output::Frame| -> Vec<f32> {
-        (0..width).map(|x| (0..height).map(|y| image.pixel(x, y)[0]).sum::<f32>()).collect()
-    };
-    let profile = profile_of(direct);
-    let (lo, hi) = profile.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    let mean = profile.iter().sum::<f32>() / width as f32;
+/// `other` shows CeilingDetail::MinifiedTexture's stripes filtered as `direct`, the raster pass's view, does. With
+/// `columns`, also across the stripes' edges: `other` must sample each image row at the raster pass's sub-pixel point.
+fn assert_filters_alike(direct: &RenderedFrame, other: &RenderedFrame, columns: bool, what: &str) {
+    let (width, height) = (direct.linear.width, direct.linear.height);
+    let profile = column_profile(direct, 0..height);
+    let (lo, hi, mean) = range_and_mean(&profile);
     assert!((hi - lo) / mean > 0.5, "{what}: the direct view shows no stripes: {profile:?}");
     // Inside the stripes, where the direct view's columns change by under a twentieth of the stripes' swing over
     // two pixels either way: there a shift under a pixel (the mirror's roughness-0 GGX core, α = 10⁻³; primary
@@ -849,18 +843,19 @@ fn assert_filters_alike(direct: &strata::output::Frame, other: &strata::output::
         })
         .collect();
     assert!(flat.len() > width as usize / 3, "{what}: too few columns inside the stripes: {flat:?}");
-    let unit = mean / height as f32;
+    let (d, o) = (&direct.linear, &other.linear);
     let mut errors: Vec<f32> = flat
         .iter()
         .flat_map(|&x| (0..height).map(move |y| (x, y)))
-        .map(|(x, y)| (0..3).map(|c| (other.pixel(x, y)[c] - direct.pixel(x, y)[c]).abs() / unit).fold(0.0, f32::max))
+        .map(|(x, y)| (0..3).map(|c| (o.pixel(x, y)[c] - d.pixel(x, y)[c]).abs() / mean).fold(0.0, f32::max))
         .collect();
     errors.sort_by(f32::total_cmp);
     let (median, p99) = (errors[errors.len() / 2], errors[errors.len() * 99 / 100]);
     // Across the stripes' edges, where those shifts do show, compare whole columns (64 rows average them out): a
     // level too high blurs the edges.
     let profile_error =
-        profile.iter().zip(&profile_of(other)).map(|(d, o)| (o - d).abs()).fold(0.0f32, f32::max) / (hi - lo);
+        profile.iter().zip(&column_profile(other, 0..height)).map(|(d, o)| (o - d).abs()).fold(0.0f32, f32::max)
+            / (hi - lo);
     eprintln!(
         "{what}: against the raster view, inside the stripes in mean pixels median {median:.4} and 99th percentile \
          {p99:.4}; columns, in the stripes' swing, {profile_error:.4}"
@@ -881,20 +876,26 @@ fn assert_filters_alike(direct: &strata::output::Frame, other: &strata::output::
     );
 }
 
+/// A column profile's least and greatest values and its mean.
+fn range_and_mean(profile: &[f32]) -> (f32, f32, f32) {
+    let (lo, hi) = profile.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    (lo, hi, profile.iter().sum::<f32>() / profile.len() as f32)
+}
+
 fn mirror_matches_direct_view(gpu: &GpuTest, detail: CeilingDetail) {
     let (width, height) = (64u32, 64u32);
     let s = settings(width, height, 16, SamplerKind::Jittered);
-    let direct = render(gpu.device(), &mirrored_ceiling(detail, false), &s).linear;
+    let direct_frame = render(gpu.device(), &mirrored_ceiling(detail, false), &s);
     let mirrored = render(gpu.device(), &mirrored_ceiling(detail, true), &s).linear;
     // The detail makes stripes in the direct view (without it the ceiling would shade smoothly); `steepest` is their
     // largest change across one pixel, in mean pixels.
-    let profile: Vec<f32> = (0..width).map(|x| (0..height).map(|y| direct.pixel(x, y)[0]).sum::<f32>()).collect();
-    let (lo, hi) = profile.iter().fold((f32::MAX, 0.0f32), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    let mean = profile.iter().sum::<f32>() / width as f32;
+    let profile = column_profile(&direct_frame, 0..height);
+    let (lo, hi, mean) = range_and_mean(&profile);
+    let direct = direct_frame.linear;
     assert!((hi - lo) / mean > 0.3, "{detail:?}: the direct view shows no stripes: {profile:?}");
     let steepest = profile.windows(2).map(|w| (w[1] - w[0]).abs()).fold(0.0f32, f32::max) / mean;
     // Each mirror pixel against the same pixel seen directly, in units of the mean pixel's red.
-    let unit = mean / height as f32;
+    let unit = mean;
     let (mut errors, mut lit) = (Vec::new(), 0);
     for y in 0..height {
         for x in 0..width {
