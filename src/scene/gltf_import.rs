@@ -117,31 +117,28 @@ fn meshes_at_node_weights(
     buffers: &[Vec<u8>],
     scene: &mut Scene,
 ) -> Result<Vec<Option<usize>>> {
+    // (glTF mesh, its node's weights as bits, strata mesh) for each copy made so far.
     let mut copies: Vec<(usize, Vec<u32>, usize)> = Vec::new();
     let mut node_meshes = Vec::new();
     for node in document.nodes() {
-        let mesh = node.mesh();
-        let own = match (&mesh, node.weights()) {
-            (Some(mesh), Some(weights)) if weights != mesh.weights().unwrap_or(&[]) => Some((mesh, weights)),
-            _ => None,
-        };
-        let Some((mesh, weights)) = own else {
-            node_meshes.push(mesh.map(|m| m.index()));
-            continue;
-        };
-        let bits: Vec<u32> = weights.iter().map(|w| w.to_bits()).collect();
-        let index = match copies.iter().find(|(m, b, _)| *m == mesh.index() && *b == bits) {
-            Some(&(_, _, index)) => index,
-            None => {
-                let mut copy = import_mesh(mesh, buffers, weights)
-                    .with_context(|| format!("node {} (its own morph target weights)", node.index()))?;
-                copy.name = format!("{} (node {} weights)", copy.name, node.index());
-                scene.meshes.push(copy);
-                copies.push((mesh.index(), bits, scene.meshes.len() - 1));
-                scene.meshes.len() - 1
+        let index = match (node.mesh(), node.weights()) {
+            (Some(mesh), Some(weights)) if weights != mesh.weights().unwrap_or(&[]) => {
+                let bits: Vec<u32> = weights.iter().map(|w| w.to_bits()).collect();
+                match copies.iter().find(|(m, b, _)| *m == mesh.index() && *b == bits) {
+                    Some(&(_, _, copy)) => Some(copy),
+                    None => {
+                        let mut copy = import_mesh(&mesh, buffers, weights)
+                            .with_context(|| format!("node {} (its own morph target weights)", node.index()))?;
+                        copy.name = format!("{} (node {} weights)", copy.name, node.index());
+                        scene.meshes.push(copy);
+                        copies.push((mesh.index(), bits, scene.meshes.len() - 1));
+                        Some(scene.meshes.len() - 1)
+                    }
+                }
             }
+            (mesh, _) => mesh.map(|m| m.index()),
         };
-        node_meshes.push(Some(index));
+        node_meshes.push(index);
     }
     Ok(node_meshes)
 }
