@@ -440,16 +440,6 @@ fn rmse(a: &strata::output::Frame, b: &strata::output::Frame) -> f64 {
     (sum / (3 * a.pixels.len()) as f64).sqrt()
 }
 
-/// Least-squares slope of log(error) against log(spp).
-fn log_log_slope(points: &[(u32, f64)]) -> f64 {
-    let xs: Vec<f64> = points.iter().map(|p| f64::from(p.0).ln()).collect();
-    let ys: Vec<f64> = points.iter().map(|p| p.1.ln()).collect();
-    let (mx, my) = (xs.iter().sum::<f64>() / xs.len() as f64, ys.iter().sum::<f64>() / ys.len() as f64);
-    let cov: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
-    let var: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
-    cov / var
-}
-
 #[test]
 fn jittered_sampling_converges_faster_than_random() {
     let gpu = GpuTest::new();

@@ -36,6 +36,7 @@ fn gpu_samplers_equal_the_rust_twin() {
         (SamplerKind::Random, 1),
         (SamplerKind::Jittered, 2),
         (SamplerKind::MultiJittered, 3),
+        (SamplerKind::Sobol, 4),
     ];
     for (kind, code) in kinds {
         for count in [1u32, 7, 16, 64] {

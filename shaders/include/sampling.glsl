@@ -8,6 +8,7 @@ const uint SAMPLER_REGULAR = 0u;
 const uint SAMPLER_RANDOM = 1u;
 const uint SAMPLER_JITTERED = 2u;
 const uint SAMPLER_MULTI_JITTERED = 3u;
+const uint SAMPLER_SOBOL = 4u;
 
 // PCG RXS-M-XS (Jarzynski and Olano 2020).
 uint pcg_hash(uint v) {
@@ -71,6 +72,48 @@ float sampling_randfloat(uint i, uint p) {
     return min(float(i) * (1.0 / 4294967808.0), 1.0 - 5.96046448e-8);
 }
 
+// Owen scrambling by hashing (Burley 2020, "Practical Hash-based Owen Scrambling", JCGT 9(4)): a
+// Laine-Karras-style permutation acts on bit-reversed values, each bit flipping depending only on the bits
+// below it; Vegdahl's constants ("Building a Better LK Hash", 2021) randomise the high digits well.
+uint laine_karras_permutation(uint x, uint seed) {
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> 16u) | 1u;
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return x;
+}
+
+uint nested_uniform_scramble(uint x, uint seed) {
+    return bitfieldReverse(laine_karras_permutation(bitfieldReverse(x), seed));
+}
+
+// The second dimension of Sobol's sequence (the first is the bit-reversed index): direction numbers from
+// the primitive polynomial x + 1, v_0 = 1/2 and v_k = v_(k-1) xor v_(k-1)/2.
+uint sobol_second_dimension(uint index) {
+    uint v = 0x80000000u;
+    uint result = 0u;
+    for (uint bit = 0u; bit < 32u; bit++) {
+        if ((index & (1u << bit)) != 0u) result ^= v;
+        v ^= v >> 1u;
+    }
+    return result;
+}
+
+// Seeds of the two coordinates' scrambles, derived from the pair's key.
+const uint SOBOL_X_SALT = 0x2545f491u;
+const uint SOBOL_Y_SALT = 0x68e31da4u;
+
+// Burley's sampler for one pair of dimensions: the index is shuffled by a nested uniform scramble (which keeps
+// every power-of-two prefix a (0,m,2)-net) and each coordinate is Owen-scrambled with its own seed. Pairs of
+// different dimensions or pixels get independent keys: that is the padding that decorrelates them.
+vec2 sobol_2d(uint key, uint index) {
+    uint i = nested_uniform_scramble(index, key);
+    uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(key ^ SOBOL_X_SALT));
+    uint y = nested_uniform_scramble(sobol_second_dimension(i), pcg_hash(key ^ SOBOL_Y_SALT));
+    return vec2(unit_float(x), unit_float(y));
+}
+
 uint strata_per_side(uint count) {
     uint c = max(count, 1u);
     uint n = uint(sqrt(float(c)));
@@ -90,6 +133,7 @@ vec2 sample_2d(uint kind, uint seed, uint pixel, uint index, uint count, uint di
         uint h = pcg_hash(k ^ pcg_hash(index));
         return vec2(unit_float(h), unit_float(pcg_hash(h)));
     }
+    if (kind == SAMPLER_SOBOL) return sobol_2d(k, index);
     if (kind == SAMPLER_JITTERED) {
         uint n = strata_per_side(count);
         uint s = sampling_permute(index % (n * n), n * n, k);
@@ -132,6 +176,10 @@ float sample_1d(uint kind, uint seed, uint pixel, uint index, uint count, uint d
     uint h = pcg_hash(k ^ pcg_hash(index));
     if (kind == SAMPLER_REGULAR) return (float(index % count) + 0.5) / float(count);
     if (kind == SAMPLER_RANDOM) return unit_float(h);
+    if (kind == SAMPLER_SOBOL) {
+        uint i = nested_uniform_scramble(index, k);
+        return unit_float(nested_uniform_scramble(bitfieldReverse(i), pcg_hash(k ^ SOBOL_X_SALT)));
+    }
     return (float(sampling_permute(index % count, count, k)) + unit_float(h)) / float(count);
 }
 #endif

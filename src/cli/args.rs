@@ -65,7 +65,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
     /// How sample points are placed: regular (strata centres; aliases), random, jittered (one random point in
-    /// each of n x n strata, Cook 1984), multi-jittered (Kensler 2013) [default: the scene file's, else jittered].
+    /// each of n x n strata, Cook 1984), multi-jittered (Kensler 2013; also stratified in x and in y), sobol
+    /// (Owen-scrambled Sobol, Burley 2020; best at powers of two) [default: the scene file's, else jittered].
     #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
     pub sampler: Option<strata::scene::settings::SamplerKind>,
     /// Seed of every random choice; the same scene, options and seed give the same bits on the same device

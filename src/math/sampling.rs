@@ -1,8 +1,9 @@
 //! Sample points, as pure functions of (seed, pixel, sample index, dimension) — CPU twin of
 //! `shaders/include/sampling.glsl`. Samplers after Cook, Porter and Carpenter (1984): `regular` (strata
-//! centres), `random` (uniform), `jittered` (n×n strata, one random point in each), and Kensler's correlated
-//! multi-jittered sampling (2013), stratified in 2D and in each 1D projection. Strata of different dimensions,
-//! and of different pixels, are paired through hash-based random permutations (Cook's decorrelation).
+//! centres), `random` (uniform), `jittered` (n×n strata, one random point in each), Kensler's correlated
+//! multi-jittered sampling (2013), stratified in 2D and in each 1D projection, and Burley's shuffled,
+//! Owen-scrambled Sobol points (2020), whose power-of-two prefixes are (0,m,2)-nets. Strata of different
+//! dimensions, and of different pixels, are paired through hash-based random permutations (Cook's decorrelation).
 use crate::scene::settings::SamplerKind;
 use glam::Vec2;
 
@@ -75,6 +76,53 @@ fn randfloat(mut i: u32, p: u32) -> f32 {
     (i as f32 * (1.0 / 4_294_967_808.0)).min(1.0 - f32::EPSILON / 2.0)
 }
 
+/// A Laine-Karras-style permutation of a bit-reversed value: each bit flips depending only on the bits below
+/// it (odd multiplies, additions and x ^= x·even all have that property), so on reversed digits it is an Owen
+/// scramble. Vegdahl's constants ("Building a Better LK Hash", 2021), which randomise the high digits that
+/// Burley's (2020) leave nearly fixed: with Burley's, error fell only as fast as jittered sampling's.
+fn laine_karras_permutation(mut x: u32, seed: u32) -> u32 {
+    x ^= x.wrapping_mul(0x3d20_adea);
+    x = x.wrapping_add(seed);
+    x = x.wrapping_mul((seed >> 16) | 1);
+    x ^= x.wrapping_mul(0x0552_6c56);
+    x ^= x.wrapping_mul(0x53a2_2864);
+    x
+}
+
+/// Owen's nested uniform scramble of a 32-bit fraction, by hashing (Burley 2020, Listing 3): each digit is
+/// flipped by a random function of the digits before it. On an index it shuffles while keeping aligned blocks.
+pub fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    laine_karras_permutation(x.reverse_bits(), seed).reverse_bits()
+}
+
+/// The second dimension of Sobol's sequence as a 32-bit fraction (the first is the bit-reversed index):
+/// direction numbers from the primitive polynomial x + 1, v₀ = ½ and v_k = v_(k−1) xor v_(k−1)/2.
+pub fn sobol_second_dimension(index: u32) -> u32 {
+    let mut v = 0x8000_0000u32;
+    let mut result = 0;
+    for bit in 0..32 {
+        if index & (1 << bit) != 0 {
+            result ^= v;
+        }
+        v ^= v >> 1;
+    }
+    result
+}
+
+/// Seeds of the two coordinates' scrambles, derived from the pair's key.
+const SOBOL_X_SALT: u32 = 0x2545_f491;
+const SOBOL_Y_SALT: u32 = 0x68e3_1da4;
+
+/// Burley's sampler for one pair of dimensions: the index is shuffled by a nested uniform scramble (every
+/// power-of-two prefix stays an aligned block of the sequence, hence a (0,m,2)-net) and each coordinate is
+/// Owen-scrambled with its own seed. Pairs of other dimensions or pixels have other keys: Burley's padding.
+fn sobol_2d(key: u32, index: u32) -> Vec2 {
+    let i = nested_uniform_scramble(index, key);
+    let x = nested_uniform_scramble(i.reverse_bits(), pcg_hash(key ^ SOBOL_X_SALT));
+    let y = nested_uniform_scramble(sobol_second_dimension(i), pcg_hash(key ^ SOBOL_Y_SALT));
+    Vec2::new(unit_float(x), unit_float(y))
+}
+
 /// Strata per side for `count` samples: the smallest n with n² ≥ count.
 pub fn strata_per_side(count: u32) -> u32 {
     let mut n = (count.max(1) as f32).sqrt() as u32;
@@ -98,6 +146,7 @@ pub fn sample_2d(kind: SamplerKind, seed: u32, pixel: u32, index: u32, count: u3
             let h = pcg_hash(k ^ pcg_hash(index));
             Vec2::new(unit_float(h), unit_float(pcg_hash(h)))
         }
+        SamplerKind::Sobol => sobol_2d(k, index),
         SamplerKind::Jittered => {
             let n = strata_per_side(count);
             // Cook's decorrelation: this dimension's strata are visited in their own random order.
@@ -135,7 +184,13 @@ pub fn sample_1d(kind: SamplerKind, seed: u32, pixel: u32, index: u32, count: u3
     match kind {
         SamplerKind::Regular => ((index % count) as f32 + 0.5) / count as f32,
         SamplerKind::Random => unit_float(h),
-        _ => (permute(index % count, count, k) as f32 + unit_float(h)) / count as f32,
+        SamplerKind::Sobol => {
+            let i = nested_uniform_scramble(index, k);
+            unit_float(nested_uniform_scramble(i.reverse_bits(), pcg_hash(k ^ SOBOL_X_SALT)))
+        }
+        SamplerKind::Jittered | SamplerKind::MultiJittered => {
+            (permute(index % count, count, k) as f32 + unit_float(h)) / count as f32
+        }
     }
 }
 
@@ -143,8 +198,13 @@ pub fn sample_1d(kind: SamplerKind, seed: u32, pixel: u32, index: u32, count: u3
 mod tests {
     use super::*;
 
-    const KINDS: [SamplerKind; 4] =
-        [SamplerKind::Regular, SamplerKind::Random, SamplerKind::Jittered, SamplerKind::MultiJittered];
+    const KINDS: [SamplerKind; 5] = [
+        SamplerKind::Regular,
+        SamplerKind::Random,
+        SamplerKind::Jittered,
+        SamplerKind::MultiJittered,
+        SamplerKind::Sobol,
+    ];
 
     #[test]
     fn permute_is_a_permutation() {
@@ -225,5 +285,58 @@ mod tests {
             hit[(sample_1d(SamplerKind::Jittered, 8, 3, i, 16, 1) * 16.0) as usize] += 1;
         }
         assert!(hit.iter().all(|&h| h == 1), "{hit:?}");
+    }
+
+    #[test]
+    fn sobols_second_dimension_starts_as_the_sequence_does() {
+        let first: Vec<f32> = (0..8).map(|i| sobol_second_dimension(i) as f32 / 4_294_967_296.0).collect();
+        assert_eq!(first, [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875]);
+    }
+
+    #[test]
+    fn the_index_shuffle_keeps_power_of_two_blocks() {
+        // Burley's shuffle maps the first 2^m indices onto one aligned block of 2^m, in some order.
+        for key in [1u32, 0xdead_beef, 77] {
+            for m in [1u32, 3, 6] {
+                let shuffled: Vec<u32> = (0..1 << m).map(|i| nested_uniform_scramble(i, key)).collect();
+                assert!(shuffled.iter().all(|s| s >> m == shuffled[0] >> m), "key {key}, 2^{m}: {shuffled:?}");
+                let mut low: Vec<u32> = shuffled.iter().map(|s| s & ((1 << m) - 1)).collect();
+                low.sort_unstable();
+                assert!(low.iter().enumerate().all(|(i, &l)| l == i as u32), "key {key}, 2^{m}: {shuffled:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn sobol_prefixes_of_power_of_two_length_are_nets() {
+        // A (0,m,2)-net: every elementary interval of area 2^-m (2^a × 2^(m−a) cells) holds exactly one point.
+        for m in 0..=8u32 {
+            let count = 1u32 << m;
+            for (pixel, dimension) in [(0u32, 0u32), (5, 3), (1234, 8)] {
+                let pts: Vec<Vec2> =
+                    (0..count).map(|i| sample_2d(SamplerKind::Sobol, 7, pixel, i, count, dimension)).collect();
+                for a in 0..=m {
+                    let c = cells(&pts, 1 << a, 1 << (m - a));
+                    assert!(c.iter().all(|&c| c == 1), "{count} points, {}x{} cells: {c:?}", 1 << a, 1 << (m - a));
+                }
+                let mut hit = vec![0u32; count as usize];
+                for i in 0..count {
+                    hit[(sample_1d(SamplerKind::Sobol, 7, pixel, i, count, dimension) * count as f32) as usize] += 1;
+                }
+                assert!(hit.iter().all(|&h| h == 1), "1D, {count} points: {hit:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn sobol_pairs_of_other_dimensions_and_pixels_are_scrambled_apart() {
+        let stratum = |p: Vec2| (p.y * 4.0) as u32 * 4 + (p.x * 4.0) as u32;
+        let strata = |pixel: u32, dimension: u32| -> Vec<u32> {
+            (0..16).map(|i| stratum(sample_2d(SamplerKind::Sobol, 1, pixel, i, 16, dimension))).collect()
+        };
+        let base = strata(5, 0);
+        let same = |v: Vec<u32>| base.iter().zip(&v).filter(|(a, b)| a == b).count();
+        let (other_dim, other_px) = (same(strata(5, 1)), same(strata(6, 0)));
+        assert!(other_dim < 8 && other_px < 8, "{other_dim} {other_px}");
     }
 }

@@ -159,6 +159,7 @@ fn sampler_index(kind: SamplerKind) -> u32 {
         SamplerKind::Random => 1,
         SamplerKind::Jittered => 2,
         SamplerKind::MultiJittered => 3,
+        SamplerKind::Sobol => 4,
     }
 }
 

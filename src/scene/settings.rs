@@ -14,10 +14,12 @@ pub enum SamplerKind {
     Jittered,
     /// Correlated multi-jittered sampling (Kensler 2013).
     MultiJittered,
+    /// Shuffled, Owen-scrambled Sobol points (Burley 2020).
+    Sobol,
 }
 
 impl SamplerKind {
-    pub const NAMES: [&'static str; 4] = ["regular", "random", "jittered", "multi-jittered"];
+    pub const NAMES: [&'static str; 5] = ["regular", "random", "jittered", "multi-jittered", "sobol"];
 
     /// The name `parse` reads.
     pub fn name(self) -> &'static str {
@@ -30,6 +32,7 @@ impl SamplerKind {
             "random" => Self::Random,
             "jittered" => Self::Jittered,
             "multi-jittered" => Self::MultiJittered,
+            "sobol" => Self::Sobol,
             other => bail!("unknown sampler \"{other}\" (one of: {})", Self::NAMES.join(", ")),
         })
     }
@@ -195,5 +198,18 @@ impl CameraOverrides {
             scene.camera = Some(camera);
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_sampler_name_parses_to_the_kind_that_bears_it() {
+        for name in SamplerKind::NAMES {
+            assert_eq!(SamplerKind::parse(name).unwrap().name(), name);
+        }
+        assert!(SamplerKind::parse("halton").unwrap_err().to_string().contains("sobol"));
     }
 }

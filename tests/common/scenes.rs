@@ -123,3 +123,13 @@ pub fn assert_finite(frame: &RenderedFrame, what: &str) {
     let bad = frame.linear.pixels.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
     assert_eq!(bad, 0, "{what}: {bad} pixels are NaN or infinite");
 }
+
+/// Least-squares slope of log(error) against log(spp).
+pub fn log_log_slope(points: &[(u32, f64)]) -> f64 {
+    let xs: Vec<f64> = points.iter().map(|p| f64::from(p.0).ln()).collect();
+    let ys: Vec<f64> = points.iter().map(|p| p.1.ln()).collect();
+    let (mx, my) = (xs.iter().sum::<f64>() / xs.len() as f64, ys.iter().sum::<f64>() / ys.len() as f64);
+    let cov: f64 = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let var: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
+    cov / var
+}
