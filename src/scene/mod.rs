@@ -5,6 +5,8 @@ pub mod camera;
 pub mod gltf_accessors;
 pub mod gltf_export;
 pub mod gltf_import;
+mod gltf_material;
+mod gltf_mesh;
 pub mod gltf_uri;
 pub mod library;
 pub mod light;

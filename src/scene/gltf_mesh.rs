@@ -1,0 +1,219 @@
+//! glTF meshes: each primitive's attributes, bounds-checked before they are read, with morph targets applied
+//! at the mesh's or a node's weights, flat normals where the file has none, and the surface derivatives bump
+//! mapping needs.
+use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact};
+use super::surface::compute_surface_derivatives;
+use super::{Mesh, Primitive, Scene};
+use anyhow::{anyhow, bail, Context as _, Result};
+use glam::{Vec2, Vec3, Vec4};
+
+pub(super) fn import_mesh(mesh: &gltf::Mesh<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Mesh> {
+    let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+    let mut primitives = Vec::new();
+    for (p_index, primitive) in mesh.primitives().enumerate() {
+        let p = import_primitive(&primitive, buffers, weights)
+            .with_context(|| format!("mesh \"{name}\", primitive {p_index}"))?;
+        primitives.push(p);
+    }
+    Ok(Mesh { name, primitives })
+}
+
+/// The mesh each node draws: its glTF mesh, or, where the node gives morph target weights of its own (glTF 2.0
+/// §3.7.2.2: they replace the mesh's), a copy of that mesh at those weights, one per distinct set.
+pub(super) fn meshes_at_node_weights(
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+) -> Result<Vec<Option<usize>>> {
+    // (glTF mesh, its node's weights as bits, strata mesh) for each copy made so far.
+    let mut copies: Vec<(usize, Vec<u32>, usize)> = Vec::new();
+    let mut node_meshes = Vec::new();
+    for node in document.nodes() {
+        let index = match (node.mesh(), node.weights()) {
+            (Some(mesh), Some(weights)) if weights != mesh.weights().unwrap_or(&[]) => {
+                let bits: Vec<u32> = weights.iter().map(|w| w.to_bits()).collect();
+                match copies.iter().find(|(m, b, _)| *m == mesh.index() && *b == bits) {
+                    Some(&(_, _, copy)) => Some(copy),
+                    None => {
+                        let mut copy = import_mesh(&mesh, buffers, weights)
+                            .with_context(|| format!("node {} (its own morph target weights)", node.index()))?;
+                        copy.name = format!("{} (node {} weights)", copy.name, node.index());
+                        scene.meshes.push(copy);
+                        copies.push((mesh.index(), bits, scene.meshes.len() - 1));
+                        Some(scene.meshes.len() - 1)
+                    }
+                }
+            }
+            (mesh, _) => mesh.map(|m| m.index()),
+        };
+        node_meshes.push(index);
+    }
+    Ok(node_meshes)
+}
+
+/// One primitive, its morph targets applied at `weights` (the mesh's or a node's).
+fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Primitive> {
+    if primitive.mode() != gltf::mesh::Mode::Triangles {
+        bail!("mode {:?} is not supported (only TRIANGLES)", primitive.mode());
+    }
+    for (semantic, accessor) in primitive.attributes() {
+        let what = semantic.to_string();
+        if let Some((dimensions, types)) = attribute_formats(&semantic) {
+            check_format(&what, &accessor, dimensions, types)?;
+        }
+        check_accessor(&accessor, buffers).with_context(|| what.clone())?;
+    }
+    if let Some(indices) = primitive.indices() {
+        use gltf::accessor::{DataType, Dimensions};
+        let types = [(DataType::U8, false), (DataType::U16, false), (DataType::U32, false)];
+        check_format("indices", &indices, &[Dimensions::Scalar], &types)?;
+        check_accessor(&indices, buffers).context("indices")?;
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    let position_accessor =
+        primitive.get(&gltf::Semantic::Positions).ok_or_else(|| anyhow!("has no POSITION attribute"))?;
+    let positions: Vec<Vec3> = collect_exact(
+        "POSITION",
+        &position_accessor,
+        reader.read_positions().ok_or_else(|| anyhow!("POSITION cannot be read"))?.map(Vec3::from_array),
+    )?;
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        bail!("POSITION {i} is not finite ({})", positions[i]);
+    }
+    let indices: Vec<u32> = match (reader.read_indices(), primitive.indices()) {
+        (Some(indices), Some(accessor)) => collect_exact("indices", &accessor, indices.into_u32())?,
+        _ => (0..positions.len() as u32).collect(),
+    };
+    if indices.len() % 3 != 0 {
+        bail!("{} indices do not make whole triangles", indices.len());
+    }
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+        bail!("index {bad} is out of range ({} vertices)", positions.len());
+    }
+    let attribute = |semantic: gltf::Semantic| primitive.get(&semantic);
+    let mut p = Primitive { positions, indices, material: primitive.material().index(), ..Default::default() };
+    if let (Some(normals), Some(a)) = (reader.read_normals(), attribute(gltf::Semantic::Normals)) {
+        p.normals = collect_exact("NORMAL", &a, normals.map(|v| Vec3::from_array(v).normalize_or_zero()))?;
+        if p.normals.iter().any(|n| !n.is_finite()) {
+            bail!("NORMAL holds non-finite values");
+        }
+    }
+    if let (Some(tangents), Some(a)) = (reader.read_tangents(), attribute(gltf::Semantic::Tangents)) {
+        p.tangents = collect_exact("TANGENT", &a, tangents.map(Vec4::from_array))?;
+    }
+    if let (Some(uv), Some(a)) = (reader.read_tex_coords(0), attribute(gltf::Semantic::TexCoords(0))) {
+        p.uvs = collect_exact("TEXCOORD_0", &a, uv.into_f32().map(Vec2::from_array))?;
+    }
+    if let (Some(uv), Some(a)) = (reader.read_tex_coords(1), attribute(gltf::Semantic::TexCoords(1))) {
+        p.uvs1 = collect_exact("TEXCOORD_1", &a, uv.into_f32().map(Vec2::from_array))?;
+    }
+    if let (Some(colors), Some(a)) = (reader.read_colors(0), attribute(gltf::Semantic::Colors(0))) {
+        p.colors = collect_exact("COLOR_0", &a, colors.into_rgba_f32().map(Vec4::from_array))?;
+    }
+    for (name, len) in [
+        ("NORMAL", p.normals.len()),
+        ("TANGENT", p.tangents.len()),
+        ("TEXCOORD_0", p.uvs.len()),
+        ("TEXCOORD_1", p.uvs1.len()),
+        ("COLOR_0", p.colors.len()),
+    ] {
+        if len != 0 && len != p.positions.len() {
+            bail!("{name} has {len} entries for {} vertices", p.positions.len());
+        }
+    }
+    if p.uvs.iter().chain(&p.uvs1).any(|uv| !uv.is_finite()) {
+        bail!("texture coordinates hold non-finite values");
+    }
+    apply_morph_targets(primitive, buffers, weights, &mut p)?;
+    if p.normals.is_empty() {
+        flatten_with_face_normals(&mut p);
+    }
+    compute_surface_derivatives(&mut p);
+    Ok(p)
+}
+
+/// Adds each morph target's displacements of POSITION, NORMAL and TANGENT, times its weight, to the base
+/// attributes (glTF 2.0 §3.7.2.2); normals are renormalized. Weights past the list count as 0.
+fn apply_morph_targets(
+    primitive: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    weights: &[f32],
+    p: &mut Primitive,
+) -> Result<()> {
+    use gltf::accessor::{DataType, Dimensions};
+    let weight = |t: usize| weights.get(t).copied().unwrap_or(0.0);
+    if let Some(t) = (0..weights.len()).find(|&t| !weight(t).is_finite()) {
+        bail!("morph target {t}: weight {} is not finite", weight(t));
+    }
+    if (0..primitive.morph_targets().len()).all(|t| weight(t) == 0.0) {
+        return Ok(());
+    }
+    // Every target's accessors are checked before the reader touches any: it slices buffers unchecked.
+    for (t, target) in primitive.morph_targets().enumerate() {
+        for (name, accessor) in
+            [("POSITION", target.positions()), ("NORMAL", target.normals()), ("TANGENT", target.tangents())]
+        {
+            let Some(accessor) = accessor else { continue };
+            let what = format!("morph target {t} {name}");
+            check_format(&what, &accessor, &[Dimensions::Vec3], &[(DataType::F32, false)])?;
+            check_accessor(&accessor, buffers).with_context(|| what.clone())?;
+            if accessor.count() != p.positions.len() {
+                bail!("{what} has {} entries for {} vertices", accessor.count(), p.positions.len());
+            }
+        }
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+    for (t, (positions, normals, tangents)) in reader.read_morph_targets().enumerate() {
+        let w = weight(t);
+        if w == 0.0 {
+            continue;
+        }
+        let deltas = |values: Option<gltf::accessor::Iter<'_, [f32; 3]>>| -> Vec<Vec3> {
+            values.map(|i| i.map(|d| w * Vec3::from_array(d)).collect()).unwrap_or_default()
+        };
+        for (v, d) in p.positions.iter_mut().zip(deltas(positions)) {
+            *v += d;
+        }
+        for (n, d) in p.normals.iter_mut().zip(deltas(normals)) {
+            *n += d;
+        }
+        for (tangent, d) in p.tangents.iter_mut().zip(deltas(tangents)) {
+            *tangent += d.extend(0.0);
+        }
+    }
+    if p.positions.iter().chain(&p.normals).any(|v| !v.is_finite()) || p.tangents.iter().any(|t| !t.is_finite()) {
+        bail!("morph targets move vertex attributes to non-finite values");
+    }
+    for n in &mut p.normals {
+        *n = n.normalize_or_zero();
+    }
+    Ok(())
+}
+
+/// Without NORMAL, glTF asks for flat normals (§3.7.2.1): give every triangle its own three vertices.
+fn flatten_with_face_normals(p: &mut Primitive) {
+    fn gather<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
+        if values.is_empty() {
+            Vec::new()
+        } else {
+            indices.iter().map(|&i| values[i as usize]).collect()
+        }
+    }
+    let normals = p
+        .indices
+        .chunks_exact(3)
+        .flat_map(|tri| {
+            let [a, b, c] = [0, 1, 2].map(|k| p.positions[tri[k] as usize]);
+            // Zero-area triangles get a zero normal rather than NaN.
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            [n, n, n]
+        })
+        .collect();
+    p.positions = gather(&p.positions, &p.indices);
+    p.tangents = gather(&p.tangents, &p.indices);
+    p.uvs = gather(&p.uvs, &p.indices);
+    p.uvs1 = gather(&p.uvs1, &p.indices);
+    p.colors = gather(&p.colors, &p.indices);
+    p.normals = normals;
+    p.indices = (0..p.positions.len() as u32).collect();
+}
