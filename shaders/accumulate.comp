@@ -3,8 +3,9 @@
 // sample, or (PRIMARY_RAYS, the reference mode) of a primary ray traced per pixel through its own sub-pixel
 // point and lens point. Per pixel: emission, direct light from one light sample chosen by power with a shadow ray query
 // (soft shadows), then a specular chain of up to max_depth vertices whose directions are perturbed around the
-// ideal reflection or refraction by GGX (gloss, translucency), each with its own direct light. The sample's
-// radiance is added into the RGBA32F accumulation image (alpha: coverage).
+// ideal reflection or refraction by GGX (gloss, translucency), each with its own direct light. With `indirect`
+// on, paths also go on by the diffuse lobe (cosine-weighted), which adds diffuse interreflection (Kajiya 1986)
+// to Cook's effects. The sample's radiance is added into the RGBA32F accumulation image (alpha: coverage).
 #extension GL_EXT_ray_query : require
 #extension GL_EXT_scalar_block_layout : require
 #extension GL_EXT_buffer_reference : require
@@ -240,6 +241,20 @@ uint pick_light(float u) {
     return pc.light_offset + lo;
 }
 
+// Marks a ray that left by the diffuse lobe: light sampling at its vertex took every light whole (the diffuse
+// lobe has no MIS), so the lights and emitters such a ray reaches add nothing, or they would count twice.
+const float DIFFUSE_BOUNCE = -1.0;
+
+// The probability that a path goes on by the diffuse lobe (0 without diffuse interreflection).
+float diffuse_probability(Shading m) {
+    return pc.indirect != 0u ? diffuse_choice(m) : 0.0;
+}
+
+// The probability that it goes on by the specular lobe: what scales the gloss rays' density for MIS.
+float specular_share(Shading m) {
+    return 1.0 - diffuse_probability(m);
+}
+
 // One light sample: the light picked by power, a point on it, its shadow ray. The diffuse lobe takes it whole;
 // the specular lobe shares it with the gloss rays by the power heuristic.
 vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_rays) {
@@ -266,7 +281,7 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
     vec3 diffuse;
     vec3 specular;
     brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);
-    if (!ls.delta) specular *= power_heuristic(p * ls.pdf, specular_pdf(s.m, s.normal, v, ls.dir));
+    if (!ls.delta) specular *= power_heuristic(p * ls.pdf, specular_share(s.m) * specular_pdf(s.m, s.normal, v, ls.dir));
     vec3 f = diffuse + specular;
     if (f == vec3(0.0)) return vec3(0.0);
     shadow_rays++;
@@ -431,10 +446,11 @@ vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
     return result;
 }
 
-// Where a specular chain goes on from one vertex: the next ray and what it carries.
+// Where a path goes on from one vertex: the next ray and what it carries.
 struct ChainRay {
     vec3 origin;
-    float pdf;  // solid-angle density of a reflection (for MIS), 0 for a refraction
+    // Solid-angle density of a reflection (for MIS), 0 for a refraction, DIFFUSE_BOUNCE for a diffuse bounce.
+    float pdf;
     vec3 dir;
     uint pixel;
     vec3 throughput;
@@ -448,15 +464,42 @@ shared uint group_chain_count;
 shared ChainRay group_chains[GROUP_SIZE];
 shared vec3 group_chain_radiance[GROUP_SIZE];
 
-// The next direction of the specular chain from vertex `depth` (GGX around the mirror or refracted direction),
-// then Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
+// A cosine-weighted direction about n (Malley's method: the concentric disk projected up onto the hemisphere).
+vec3 sample_cosine(vec3 n, vec2 u) {
+    vec2 d = concentric_disk(u);
+    vec3 t;
+    vec3 b;
+    make_basis(n, t, b);
+    return normalize(t * d.x + b * d.y + n * sqrt(max(0.0, 1.0 - dot(d, d))));
+}
+
+// The next direction of the path from vertex `depth`: with diffuse interreflection on, by the diffuse lobe
+// (cosine-weighted) with probability diffuse_probability; otherwise GGX around the mirror or refracted direction.
+// Then Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
 // Survival is 4x the weight: weak reflections still end most paths, at a quarter of the variance.
 bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
     vec3 weight;
     float u_lobe = sample1(r.pixel, dim + 3u);
-    if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + 4u), u_lobe, r.dir, weight, r.pdf)) {
-        return false;
+    float p_diffuse = diffuse_probability(s.m);
+    if (u_lobe < p_diffuse) {
+        r.dir = sample_cosine(s.normal, sample2(r.pixel, dim + 4u));
+        float nl = dot(s.normal, r.dir);
+        if (nl <= 0.0 || dot(s.geometric, r.dir) <= 0.0) return false;
+        vec3 diffuse;
+        vec3 specular;
+        brdf_cos(s.m, s.normal, v, r.dir, diffuse, specular);
+        // f·cos / (p_diffuse · cos/π).
+        weight = diffuse * (PI / (nl * p_diffuse));
+        r.pdf = DIFFUSE_BOUNCE;
+    } else {
+        // The rest of u_lobe chooses between reflection and refraction.
+        u_lobe = (u_lobe - p_diffuse) / (1.0 - p_diffuse);
+        if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + 4u), u_lobe, r.dir, weight, r.pdf)) {
+            return false;
+        }
+        weight /= 1.0 - p_diffuse;
+        r.pdf *= 1.0 - p_diffuse;
     }
     r.throughput *= weight;
     float survive = min(1.0, 4.0 * max(r.throughput.x, max(r.throughput.y, r.throughput.z)));
@@ -477,8 +520,8 @@ vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout ui
     return radiance;
 }
 
-// The specular chain from vertex 1 on: each ray finds a light (MIS against light sampling), the background,
-// or a surface whose emission and one light sample it adds before going on.
+// The chain from vertex 1 on: each ray finds a light (MIS against light sampling; nothing for a diffuse
+// bounce), the background, or a surface whose emission and one light sample it adds before going on.
 vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
     vec3 radiance = vec3(0.0);
     for (uint depth = 1u; depth < pc.max_depth; depth++) {
@@ -491,9 +534,10 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
         float light_density;
         vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
-        // A reflection (pdf > 0) that reaches a light shares it with light sampling; refraction has it alone.
+        // A reflection (pdf > 0) that reaches a light shares it with light sampling; refraction has it alone;
+        // a diffuse bounce leaves it to light sampling.
         if (light != vec3(0.0)) {
-            float w = r.pdf > 0.0 ? power_heuristic(r.pdf, light_density) : 1.0;
+            float w = r.pdf > 0.0 ? power_heuristic(r.pdf, light_density) : (r.pdf == DIFFUSE_BOUNCE ? 0.0 : 1.0);
             radiance += r.throughput * light * w;
             break;
         }
@@ -505,7 +549,9 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         r.cone.x += r.cone.y * t_hit;
         Surface s = hit_surface(q, v, r.cone.x, false);
         float w = 1.0;
-        if (r.pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
+        if (r.pdf == DIFFUSE_BOUNCE && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
+            w = 0.0;
+        } else if (r.pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
             float cos_light = abs(dot(s.geometric, r.dir));
             float density = cos_light > 0.0 ? s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power) : 0.0;
             w = power_heuristic(r.pdf, density);

@@ -300,9 +300,20 @@ fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
     assert!(shadow > 64 * 40 && shadow <= 64 * 40 * 4 * 4, "shadow rays {shadow}");
     assert!(summary["rays_per_second"].as_f64().unwrap() > 0.0);
     assert_eq!(summary["primary"], "raster");
+    assert_eq!(summary["indirect"], false);
     assert_eq!(summary["camera_rays"], 0, "the G-buffer pass rasterises primary visibility");
     assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (64, 40));
     assert!(exr.is_file());
+
+    // --indirect: the diffuse floor now sends paths on, and the summary says so.
+    let (scene, png) = (scene.to_str().unwrap(), png.to_str().unwrap());
+    let args = ["render", scene, "-o", png, "--size", "64x40", "--spp", "4", "--json", "--quiet", "--validate"];
+    let out = strata(&[&args[..], &["--indirect"]].concat());
+    assert!(out.status.success(), "{}", outcome(&out));
+    let indirect: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+    assert_eq!(indirect["indirect"], true);
+    let (with, without) = (indirect["secondary_rays"].as_u64().unwrap(), summary["secondary_rays"].as_u64().unwrap());
+    assert!(with > without + 64 * 40, "secondary rays: {with} with --indirect, {without} without");
 }
 
 #[test]

@@ -173,6 +173,94 @@ fn better_samplers_integrate_a_disk_light_with_less_error() {
     gpu.finish().unwrap();
 }
 
+#[test]
+fn diffuse_interreflection_reflects_a_uniform_sky_as_the_albedo_and_never_counts_a_light_twice() {
+    let gpu = GpuTest::new();
+    // No lights: a Lambertian plane under a sky of radiance 1 reflects ρ/π · π · 1 = ρ, and cosine-weighted
+    // bounces estimate it without variance. Without diffuse interreflection it is black.
+    let mut sky = ground_scene();
+    sky.camera = Some(ortho_down(Vec3::ZERO, 1.0, 0.25));
+    for primary in [Primary::Raster, Primary::Rays] {
+        let base = RenderSettings { background: Vec3::ONE, primary, ..settings(16, 16, 4, SamplerKind::Jittered) };
+        let direct = render(gpu.device(), &sky, &base);
+        let indirect = render(gpu.device(), &sky, &RenderSettings { indirect: true, ..base });
+        let range = |f: &RenderedFrame| {
+            let values = f.linear.pixels.iter().flat_map(|p| [p[0], p[1], p[2]]);
+            values.fold((f32::MAX, f32::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        };
+        assert_eq!(range(&direct), (0.0, 0.0), "{primary:?}: without interreflection the sky lights nothing");
+        // The raster mode reads the albedo from the G-buffer's 8-bit sRGB texel (0.8 is stored as 231/255).
+        let (lo, hi) = range(&indirect);
+        assert!(hi - lo < 1e-5 && (lo - 0.8).abs() < 2e-3, "{primary:?}: {lo}..{hi}, not the albedo 0.8");
+    }
+    // Bounces that reach a light add nothing: light sampling has counted it. The disk light's closed form holds
+    // with interreflection on (the plane sees nothing else).
+    let (disk, expected) = disk_light_scene(0.01);
+    let s = RenderSettings { indirect: true, ..settings(32, 32, 64, SamplerKind::Jittered) };
+    let frame = render(gpu.device(), &disk, &s);
+    let mean = |f: &RenderedFrame| f.linear.pixels.iter().map(|p| p[0]).sum::<f32>() / f.linear.pixels.len() as f32;
+    assert!((mean(&frame) - expected).abs() <= 0.01 * expected, "mean radiance {}, analytic {expected}", mean(&frame));
+    // On a glossy dielectric the gloss rays now share their paths with diffuse bounces; their MIS weights against
+    // light sampling must follow, or the highlight would change.
+    let mut glossy = disk;
+    glossy.materials[0].roughness = 0.3;
+    glossy.materials[0].specular = 1.0;
+    let on = mean(&render(gpu.device(), &glossy, &s));
+    let off = mean(&render(gpu.device(), &glossy, &RenderSettings { indirect: false, ..s }));
+    assert!((on - off).abs() <= 0.01 * off, "glossy: {on} with interreflection, {off} without");
+    gpu.finish().unwrap();
+}
+
+#[test]
+fn diffuse_interreflection_inside_a_glowing_box_sums_the_bounces() {
+    // Inside a closed box whose walls have albedo ρ and emit E, every vertex sees radiance arriving from walls
+    // alone, so light sampling at vertex k adds ρ^(k+1)·E: with paths of D vertices the radiance is
+    // E·(1 + ρ + … + ρ^D), the geometric series of the rendering equation (Kajiya 1986) cut at D. Without
+    // interreflection it is E·(1 + ρ).
+    use strata::render::frame::DEFAULT_MAX_DEPTH;
+    use strata::scene::Material;
+    let gpu = GpuTest::new();
+    let (albedo, emission) = (0.5f32, 1.0f32);
+    let mut scene = Scene::default();
+    scene.materials.push(Material {
+        name: "glowing wall".into(),
+        base_color: glam::Vec4::new(albedo, albedo, albedo, 1.0),
+        metallic: 0.0,
+        roughness: 1.0,
+        specular: 0.0,
+        emissive: Vec3::splat(emission),
+        double_sided: true,
+        ..Default::default()
+    });
+    place(&mut scene, "box", strata::scene::shapes::cuboid(Vec3::ONE, Some(0)), Mat4::IDENTITY);
+    scene.camera = Some(Camera {
+        name: "inside".into(),
+        world_from_camera: Mat4::from_translation(Vec3::new(0.0, 0.0, 0.5)),
+        projection: Projection::Perspective { yfov: 50f32.to_radians(), znear: 0.05, zfar: Some(10.0) },
+        lens: Lens::PINHOLE,
+    });
+    let mean = |indirect: bool| {
+        let frame =
+            render(gpu.device(), &scene, &RenderSettings { indirect, ..settings(32, 32, 256, SamplerKind::Jittered) });
+        frame.linear.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / frame.linear.pixels.len() as f64
+    };
+    let series = |terms: u32| (0..=terms).map(|k| f64::from(albedo).powi(k as i32)).sum::<f64>() * f64::from(emission);
+    let (direct, indirect) = (mean(false), mean(true));
+    eprintln!(
+        "direct {direct:.4} (E(1+ρ) = {:.4}), indirect {indirect:.4} (series {:.4})",
+        series(1),
+        series(DEFAULT_MAX_DEPTH)
+    );
+    assert!((direct - series(1)).abs() <= 0.01 * series(1), "direct only: {direct:.4}, E(1 + ρ) = {:.4}", series(1));
+    let expected = series(DEFAULT_MAX_DEPTH);
+    assert!(
+        (indirect - expected).abs() <= 0.01 * expected,
+        "with interreflection {indirect:.4}, E·Σρ^k to k = {DEFAULT_MAX_DEPTH} is {expected:.4} (to infinity {:.4})",
+        series(64)
+    );
+    gpu.finish().unwrap();
+}
+
 /// The 10–90% width of the edge spread of a uniform disk of diameter 1 seen through a one-pixel box filter of
 /// width `box_px / diameter_px`: the ratio that turns a measured edge width into a circle of confusion.
 fn disk_edge_width_ratio(diameter_px: f32) -> f32 {

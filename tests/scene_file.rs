@@ -122,15 +122,20 @@ fn settings_layer_defaults_then_file_then_command_line() {
 }
 
 #[test]
-fn the_render_table_chooses_traced_primary_rays() {
+fn the_render_table_chooses_traced_primary_rays_and_interreflection() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = std::env::temp_dir().join(format!("strata-primary-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("traced.toml");
     let gltf = root.join("scenes/cornell.gltf");
-    std::fs::write(&path, format!("gltf = {:?}\n[render]\nprimary = \"rays\"\n", gltf.to_str().unwrap())).unwrap();
+    let render = "[render]\nprimary = \"rays\"\nindirect = true\n";
+    std::fs::write(&path, format!("gltf = {:?}\n{render}", gltf.to_str().unwrap())).unwrap();
     let loaded = strata::load(&path, &Default::default()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(loaded.settings.primary, Some(Primary::Rays));
+    assert_eq!(loaded.settings.indirect, Some(true));
+    assert!(RenderSettings::default().with(&loaded.settings).indirect);
+    assert!(!RenderSettings::default().indirect, "Cook's effects alone unless asked");
 }
 
 #[test]

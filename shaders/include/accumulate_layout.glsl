@@ -60,5 +60,6 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint max_depth;
     float total_light_power;  // the sum the selection probabilities were divided by
     uint64_t ray_log;         // where to record every ray cast (RayLog, the benchmark's replay probe), or 0
+    uint indirect;            // 1: paths also go on by the diffuse lobe (diffuse interreflection, Kajiya 1986)
 } pc;
 #endif

@@ -109,6 +109,18 @@ float specular_pdf(Shading m, vec3 n, vec3 v, vec3 l) {
     return smith_g1(nv, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * nv) * reflect_probability(m, vh);
 }
 
+// With diffuse interreflection on, the probability that a path goes on by the diffuse lobe rather than the
+// specular one: the lobes' rough weights (diffuse albedo against F0, the metal's colour and transmission), with
+// at least a quarter left to the specular lobe where it has any weight, so glossy reflections stay sampled.
+float diffuse_choice(Shading m) {
+    float d = luminance((1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo);
+    float r = (m.ior - 1.0) / (m.ior + 1.0);
+    vec3 f0 = min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
+    float s = luminance(mix(f0, m.albedo, m.metallic)) + luminance((1.0 - m.metallic) * m.transmission * m.albedo);
+    if (!(d > 0.0)) return 0.0;
+    return s > 0.0 ? min(d / (d + s), 0.75) : 1.0;
+}
+
 // The power heuristic (β = 2) weight of a strategy with density a against one with density b.
 float power_heuristic(float a, float b) {
     float a2 = a * a;

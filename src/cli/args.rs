@@ -95,6 +95,11 @@ pub struct RenderArgs {
     /// tested against; the shutter time is still shared per sample) [default: the scene file's, else raster].
     #[arg(long, value_name = "MODE", value_parser = parse_primary)]
     pub primary: Option<strata::scene::settings::Primary>,
+    /// Also follow paths by the diffuse lobe: light bouncing between diffuse surfaces (Kajiya 1986), up to 3
+    /// bounces with Russian roulette, on top of Cook's effects. Slower and noisier; off by default, or as the
+    /// scene file's `indirect` says.
+    #[arg(long)]
+    pub indirect: bool,
     /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
     /// 0.02,0.02,0.025].
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]

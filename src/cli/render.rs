@@ -39,6 +39,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         exposure: args.exposure,
         tone_map: args.tone_map,
         primary: args.primary,
+        indirect: args.indirect.then_some(true),
         output: args.output.clone(),
     };
     if let Some(ev) = args.exposure {
@@ -133,6 +134,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         spp: if args.preview { 1 } else { settings.spp },
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
         primary: if args.preview { "raster" } else { settings.primary.name() },
+        indirect: settings.indirect && !args.preview,
         seed: settings.seed,
         seconds,
         stats: match &picture {

@@ -8,6 +8,8 @@ pub struct Summary {
     pub sampler: &'static str,
     /// Where visible surfaces came from: "raster" or "rays".
     pub primary: &'static str,
+    /// Diffuse interreflection was on.
+    pub indirect: bool,
     pub seed: u64,
     pub seconds: f64,
     pub stats: Option<strata::render::frame::FrameStats>,
@@ -27,7 +29,7 @@ impl Summary {
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
         let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
         format!(
-            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+            "strata: wrote {} ({}x{}, {} spp {}, {} primary{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
              {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
             self.written.join(" and "),
             self.width,
@@ -35,6 +37,7 @@ impl Summary {
             self.spp,
             self.sampler,
             self.primary,
+            if self.indirect { ", indirect diffuse" } else { "" },
             self.triangles,
             self.device,
             self.seconds,
@@ -55,6 +58,7 @@ impl Summary {
             "spp": self.spp,
             "sampler": self.sampler,
             "primary": self.primary,
+            "indirect": self.indirect,
             "seed": self.seed,
             "seconds": self.seconds,
             "render_seconds": render_seconds,

@@ -113,7 +113,9 @@ pub struct AccumulatePush {
     pub total_light_power: f32,
     /// The device address of a `RayLog` (render::ray_log) to record every ray cast into, or 0.
     pub ray_log: u64,
-    pub pad: [u32; 2],
+    /// 1: paths also go on by the diffuse lobe (diffuse interreflection), 0: Cook's effects alone.
+    pub indirect: u32,
+    pub pad: u32,
 }
 
 #[repr(C)]
@@ -154,6 +156,7 @@ mod tests {
         assert_eq!(offset_of!(AccumulatePush, ray_log), 96);
         assert_eq!(offset_of!(AccumulatePush, width), 48);
         assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
+        assert_eq!(offset_of!(AccumulatePush, indirect), 104);
         assert_eq!(size_of::<ResolvePush>(), 32);
     }
 }

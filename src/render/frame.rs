@@ -295,7 +295,8 @@ pub fn render_frame(
                 max_depth,
                 total_light_power: set.total_power,
                 ray_log: ray_log.as_ref().filter(|_| index == 0).map_or(0, |log| log.address()),
-                pad: [0; 2],
+                indirect: u32::from(settings.indirect),
+                pad: 0,
             };
             samples.push((camera_sample, push));
         }

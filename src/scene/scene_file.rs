@@ -99,6 +99,7 @@ struct RenderSection {
     exposure: Option<S<f32>>,
     tone_map: Option<S<String>>,
     primary: Option<S<String>>,
+    indirect: Option<bool>,
     output: Option<String>,
 }
 
@@ -622,6 +623,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         exposure: r.exposure.as_ref().map(|e| source.in_range(e, "exposure", -64.0, 64.0)).transpose()?,
         tone_map,
         primary,
+        indirect: r.indirect,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
 }

@@ -100,6 +100,8 @@ pub struct RenderSettings {
     pub exposure: f32,
     pub tone_map: ToneMap,
     pub primary: Primary,
+    /// Paths also go on by the diffuse lobe: diffuse interreflection (Kajiya 1986) on top of Cook's effects.
+    pub indirect: bool,
     /// Default output path (the command line's `-o` wins).
     pub output: Option<PathBuf>,
 }
@@ -116,6 +118,7 @@ impl Default for RenderSettings {
             exposure: 0.0,
             tone_map: ToneMap::Filmic,
             primary: Primary::Raster,
+            indirect: false,
             output: None,
         }
     }
@@ -133,6 +136,7 @@ pub struct SettingsOverrides {
     pub exposure: Option<f32>,
     pub tone_map: Option<ToneMap>,
     pub primary: Option<Primary>,
+    pub indirect: Option<bool>,
     pub output: Option<PathBuf>,
 }
 
@@ -149,6 +153,7 @@ impl RenderSettings {
         self.exposure = o.exposure.unwrap_or(self.exposure);
         self.tone_map = o.tone_map.unwrap_or(self.tone_map);
         self.primary = o.primary.unwrap_or(self.primary);
+        self.indirect = o.indirect.unwrap_or(self.indirect);
         self.output = o.output.or(self.output);
         self
     }

@@ -82,6 +82,7 @@ pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> Rend
         exposure: 0.0,
         tone_map: ToneMap::Clamp,
         primary: strata::scene::settings::Primary::Raster,
+        indirect: false,
         output: None,
     }
 }
