@@ -32,6 +32,7 @@ enum Command {
                             Examples:\n  strata render scenes/showcase.toml -o showcase.png\n  \
                             strata render scenes/dof.toml -o dof.png --spp 64 --aperture 0.05 --focus 3\n  \
                             strata render scenes/motion.toml -o motion.exr --shutter 0:0.5 --sampler multi-jittered\n  \
+                            strata render scenes/cornell.toml -o cornell.png --spp 256 --sampler sobol --indirect\n  \
                             strata render Box.gltf -o box.png --size 512x512 --json --quiet --validate")]
     Render(RenderArgs),
     /// List every Vulkan device with its driver, API version and ray-query support, and whether the
