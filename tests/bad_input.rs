@@ -169,6 +169,7 @@ fn every_bad_input_gives_its_error() {
         (scene_file(&dir, "absurd-spp.toml", "[render]\nspp = 100000000\n"), "spp = 100000000 is out of range"),
         (scene_file(&dir, "zero-width.toml", "[render]\nwidth = 0\n"), "width = 0 is out of range"),
         (scene_file(&dir, "huge-height.toml", "[render]\nheight = 99999\n"), "height = 99999 is out of range"),
+        (scene_file(&dir, "deep-paths.toml", "[render]\nbounces = 99\n"), "bounces = 99 is out of range (0 to 16)"),
         (scene_file(&dir, "bad-toml.toml", "[render\nspp = 4\n"), "bad-toml.toml:2:"),
         (write(&dir, "no-gltf.toml", b"gltf = \"nowhere.gltf\"\n"), "nowhere.gltf does not exist"),
         (

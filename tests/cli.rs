@@ -311,7 +311,7 @@ fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
     let out = strata(&[&args[..], &["--indirect"]].concat());
     assert!(out.status.success(), "{}", outcome(&out));
     let indirect: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
-    assert_eq!(indirect["indirect"], true);
+    assert_eq!((&indirect["indirect"], &indirect["bounces"]), (&serde_json::json!(true), &serde_json::json!(3)));
     let (with, without) = (indirect["secondary_rays"].as_u64().unwrap(), summary["secondary_rays"].as_u64().unwrap());
     assert!(with > without + 64 * 40, "secondary rays: {with} with --indirect, {without} without");
 }

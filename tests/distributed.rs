@@ -214,10 +214,9 @@ fn diffuse_interreflection_reflects_a_uniform_sky_as_the_albedo_and_never_counts
 #[test]
 fn diffuse_interreflection_inside_a_glowing_box_sums_the_bounces() {
     // Inside a closed box whose walls have albedo ρ and emit E, every vertex sees radiance arriving from walls
-    // alone, so light sampling at vertex k adds ρ^(k+1)·E: with paths of D vertices the radiance is
-    // E·(1 + ρ + … + ρ^D), the geometric series of the rendering equation (Kajiya 1986) cut at D. Without
+    // alone, so light sampling at vertex k adds ρ^(k+1)·E: with paths of B bounces the radiance is
+    // E·(1 + ρ + … + ρ^(B+1)), the geometric series of the rendering equation (Kajiya 1986) cut at B. Without
     // interreflection it is E·(1 + ρ).
-    use strata::render::frame::DEFAULT_MAX_DEPTH;
     use strata::scene::Material;
     let gpu = GpuTest::new();
     let (albedo, emission) = (0.5f32, 1.0f32);
@@ -239,25 +238,25 @@ fn diffuse_interreflection_inside_a_glowing_box_sums_the_bounces() {
         projection: Projection::Perspective { yfov: 50f32.to_radians(), znear: 0.05, zfar: Some(10.0) },
         lens: Lens::PINHOLE,
     });
-    let mean = |indirect: bool| {
-        let frame =
-            render(gpu.device(), &scene, &RenderSettings { indirect, ..settings(32, 32, 256, SamplerKind::Jittered) });
+    let mean = |indirect: bool, bounces: u32| {
+        let s = RenderSettings { indirect, bounces, ..settings(32, 32, 256, SamplerKind::Jittered) };
+        let frame = render(gpu.device(), &scene, &s);
         frame.linear.pixels.iter().map(|p| f64::from(p[0])).sum::<f64>() / frame.linear.pixels.len() as f64
     };
     let series = |terms: u32| (0..=terms).map(|k| f64::from(albedo).powi(k as i32)).sum::<f64>() * f64::from(emission);
-    let (direct, indirect) = (mean(false), mean(true));
-    eprintln!(
-        "direct {direct:.4} (E(1+ρ) = {:.4}), indirect {indirect:.4} (series {:.4})",
-        series(1),
-        series(DEFAULT_MAX_DEPTH)
-    );
+    let direct = mean(false, 3);
     assert!((direct - series(1)).abs() <= 0.01 * series(1), "direct only: {direct:.4}, E(1 + ρ) = {:.4}", series(1));
-    let expected = series(DEFAULT_MAX_DEPTH);
-    assert!(
-        (indirect - expected).abs() <= 0.01 * expected,
-        "with interreflection {indirect:.4}, E·Σρ^k to k = {DEFAULT_MAX_DEPTH} is {expected:.4} (to infinity {:.4})",
-        series(64)
-    );
+    // The default 3 bounces and 1 (their series differ by 9%).
+    for bounces in [3, 1] {
+        let (measured, expected) = (mean(true, bounces), series(bounces + 1));
+        eprintln!("{bounces} bounces: {measured:.4}, series {expected:.4}");
+        assert!(
+            (measured - expected).abs() <= 0.01 * expected,
+            "{bounces} bounces: {measured:.4}, but E·Σρ^k to k = {} is {expected:.4} (to infinity {:.4})",
+            bounces + 1,
+            series(64)
+        );
+    }
     gpu.finish().unwrap();
 }
 
@@ -756,9 +755,10 @@ fn direct_light_is_linear_in_metalness() {
         (ground.metallic, ground.roughness, ground.specular) = (metallic, 0.4, 1.0);
         scene.camera = Some(ortho_down(Vec3::ZERO, 1.0, 3.0));
         let on_gpu = SceneOnGpu::upload(gpu.device(), &scene).unwrap();
-        let direct_only = FrameOptions { max_depth: 1, ..Default::default() };
-        let s = settings(48, 48, 4, SamplerKind::Jittered);
-        render_frame(gpu.device(), &scene, &on_gpu, &s, &direct_only, &mut |_, _| true).unwrap().linear
+        let direct_only = RenderSettings { bounces: 0, ..settings(48, 48, 4, SamplerKind::Jittered) };
+        render_frame(gpu.device(), &scene, &on_gpu, &direct_only, &FrameOptions::default(), &mut |_, _| true)
+            .unwrap()
+            .linear
     };
     let t = 51.0 / 255.0;
     let (dielectric, partial, metal) = (lit(0.0), lit(t), lit(1.0));

@@ -128,12 +128,12 @@ fn the_render_table_chooses_traced_primary_rays_and_interreflection() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("traced.toml");
     let gltf = root.join("scenes/cornell.gltf");
-    let render = "[render]\nprimary = \"rays\"\nindirect = true\n";
+    let render = "[render]\nprimary = \"rays\"\nindirect = true\nbounces = 6\n";
     std::fs::write(&path, format!("gltf = {:?}\n{render}", gltf.to_str().unwrap())).unwrap();
     let loaded = strata::load(&path, &Default::default()).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(loaded.settings.primary, Some(Primary::Rays));
-    assert_eq!(loaded.settings.indirect, Some(true));
+    assert_eq!((loaded.settings.indirect, loaded.settings.bounces), (Some(true), Some(6)));
     assert!(RenderSettings::default().with(&loaded.settings).indirect);
     assert!(!RenderSettings::default().indirect, "Cook's effects alone unless asked");
 }

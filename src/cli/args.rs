@@ -2,7 +2,7 @@
 use clap::Args;
 use std::path::PathBuf;
 use strata::scene::settings::MAX_IMAGE_SIDE as MAX_SIDE;
-use strata::scene::settings::MAX_SPP;
+use strata::scene::settings::{MAX_BOUNCES, MAX_SPP};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -95,11 +95,15 @@ pub struct RenderArgs {
     /// tested against; the shutter time is still shared per sample) [default: the scene file's, else raster].
     #[arg(long, value_name = "MODE", value_parser = parse_primary)]
     pub primary: Option<strata::scene::settings::Primary>,
-    /// Also follow paths by the diffuse lobe: light bouncing between diffuse surfaces (Kajiya 1986), up to 3
-    /// bounces with Russian roulette, on top of Cook's effects. Slower and noisier; off by default, or as the
-    /// scene file's `indirect` says.
+    /// Also follow paths by the diffuse lobe: light bouncing between diffuse surfaces (Kajiya 1986), up to
+    /// --bounces times with Russian roulette, on top of Cook's effects. Slower and noisier; off by default, or as
+    /// the scene file's `indirect` says.
     #[arg(long)]
     pub indirect: bool,
+    /// Most bounces after the visible surface: gloss and translucency rays, and diffuse ones with --indirect. 0 is
+    /// direct light alone; 3 sees through a glass sphere [default: the scene file's, else 3].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
+    pub bounces: Option<u32>,
     /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
     /// 0.02,0.02,0.025].
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]

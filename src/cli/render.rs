@@ -40,6 +40,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         tone_map: args.tone_map,
         primary: args.primary,
         indirect: args.indirect.then_some(true),
+        bounces: args.bounces,
         output: args.output.clone(),
     };
     if let Some(ev) = args.exposure {
@@ -135,6 +136,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
         primary: if args.preview { "raster" } else { settings.primary.name() },
         indirect: settings.indirect && !args.preview,
+        bounces: if args.preview { 0 } else { settings.bounces },
         seed: settings.seed,
         seconds,
         stats: match &picture {

@@ -10,6 +10,7 @@ pub struct Summary {
     pub primary: &'static str,
     /// Diffuse interreflection was on.
     pub indirect: bool,
+    pub bounces: u32,
     pub seed: u64,
     pub seconds: f64,
     pub stats: Option<strata::render::frame::FrameStats>,
@@ -59,6 +60,7 @@ impl Summary {
             "sampler": self.sampler,
             "primary": self.primary,
             "indirect": self.indirect,
+            "bounces": self.bounces,
             "seed": self.seed,
             "seconds": self.seconds,
             "render_seconds": render_seconds,

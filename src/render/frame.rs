@@ -29,25 +29,14 @@ const DIM_PIXEL: u32 = 0;
 const DIM_TIME: u32 = 1;
 const DIM_LENS: u32 = 2;
 
-/// Path vertices along a specular chain: the visible surface and up to three gloss/translucency bounces
-/// (enough to see through a glass sphere: in, out, and what lies behind).
-pub const DEFAULT_MAX_DEPTH: u32 = 4;
-
 /// Options that are not picture settings.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub struct FrameOptions {
     /// Time every pass with GPU timestamps (for benchmarks).
     pub timestamps: bool,
-    pub max_depth: u32,
     /// Record every ray the first sample's accumulation pass casts, into [`RenderedFrame::ray_log`] (for the
     /// benchmark to replay through the bare ray-query probe).
     pub log_rays: bool,
-}
-
-impl Default for FrameOptions {
-    fn default() -> Self {
-        Self { timestamps: false, max_depth: DEFAULT_MAX_DEPTH, log_rays: false }
-    }
 }
 
 /// GPU time per pass summed over the frame, in milliseconds.
@@ -230,7 +219,8 @@ pub fn render_frame(
         cameras: &cameras,
     })?;
     // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
-    let max_depth = options.max_depth.max(1);
+    // Path vertices: the visible surface and its bounces.
+    let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
     let rays_per_pixel = 2 * u64::from(max_depth);
     let ray_log = if options.log_rays {
         Some(super::ray_log::RayLog::new(device, u64::from(width) * u64::from(height) * rays_per_pixel)?)

@@ -5,7 +5,7 @@ use super::camera::{look_at, Lens};
 use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
-use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -100,6 +100,7 @@ struct RenderSection {
     tone_map: Option<S<String>>,
     primary: Option<S<String>>,
     indirect: Option<bool>,
+    bounces: Option<S<u32>>,
     output: Option<String>,
 }
 
@@ -624,6 +625,15 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         tone_map,
         primary,
         indirect: r.indirect,
+        bounces: match &r.bounces {
+            Some(b) if *b.get_ref() <= MAX_BOUNCES => Some(*b.get_ref()),
+            Some(b) => {
+                return Err(
+                    source.error(b.span(), format!("bounces = {} is out of range (0 to {MAX_BOUNCES})", b.get_ref()))
+                )
+            }
+            None => None,
+        },
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
 }

@@ -86,6 +86,8 @@ impl Primary {
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest samples-per-pixel count accepted: more is a typo, not a render.
 pub const MAX_SPP: u32 = 65536;
+/// Most bounces a path may take after the visible surface (each costs a ray and a shadow ray per pixel).
+pub const MAX_BOUNCES: u32 = 16;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderSettings {
@@ -102,6 +104,9 @@ pub struct RenderSettings {
     pub primary: Primary,
     /// Paths also go on by the diffuse lobe: diffuse interreflection (Kajiya 1986) on top of Cook's effects.
     pub indirect: bool,
+    /// Most bounces after the visible surface: gloss and translucency rays (and diffuse ones with `indirect`).
+    /// 0 is direct light alone; the default 3 sees through a glass sphere (in, out, and what lies behind).
+    pub bounces: u32,
     /// Default output path (the command line's `-o` wins).
     pub output: Option<PathBuf>,
 }
@@ -119,6 +124,7 @@ impl Default for RenderSettings {
             tone_map: ToneMap::Filmic,
             primary: Primary::Raster,
             indirect: false,
+            bounces: 3,
             output: None,
         }
     }
@@ -137,6 +143,7 @@ pub struct SettingsOverrides {
     pub tone_map: Option<ToneMap>,
     pub primary: Option<Primary>,
     pub indirect: Option<bool>,
+    pub bounces: Option<u32>,
     pub output: Option<PathBuf>,
 }
 
@@ -154,6 +161,7 @@ impl RenderSettings {
         self.tone_map = o.tone_map.unwrap_or(self.tone_map);
         self.primary = o.primary.unwrap_or(self.primary);
         self.indirect = o.indirect.unwrap_or(self.indirect);
+        self.bounces = o.bounces.unwrap_or(self.bounces);
         self.output = o.output.or(self.output);
         self
     }

@@ -83,6 +83,7 @@ pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> Rend
         tone_map: ToneMap::Clamp,
         primary: strata::scene::settings::Primary::Raster,
         indirect: false,
+        bounces: 3,
         output: None,
     }
 }
