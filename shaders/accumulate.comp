@@ -520,6 +520,14 @@ vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout ui
     return radiance;
 }
 
+// The weight of light a chain ray reaches, which light sampling chooses with solid-angle density
+// `light_density` (0: never): a reflection (pdf > 0) shares it by MIS, a refraction has it alone (light sampling
+// never covers it), a diffuse bounce leaves it to light sampling, which took it whole.
+float reached_light_weight(float pdf, float light_density) {
+    if (pdf == DIFFUSE_BOUNCE) return light_density > 0.0 ? 0.0 : 1.0;
+    return pdf > 0.0 ? power_heuristic(pdf, light_density) : 1.0;
+}
+
 // The chain from vertex 1 on: each ray finds a light (MIS against light sampling; nothing for a diffuse
 // bounce), the background, or a surface whose emission and one light sample it adds before going on.
 vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
@@ -534,11 +542,8 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         float t_hit = hit ? rayQueryGetIntersectionTEXT(q, true) : 1e30;
         float light_density;
         vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
-        // A reflection (pdf > 0) that reaches a light shares it with light sampling; refraction has it alone;
-        // a diffuse bounce leaves it to light sampling.
         if (light != vec3(0.0)) {
-            float w = r.pdf > 0.0 ? power_heuristic(r.pdf, light_density) : (r.pdf == DIFFUSE_BOUNCE ? 0.0 : 1.0);
-            radiance += r.throughput * light * w;
+            radiance += r.throughput * light * reached_light_weight(r.pdf, light_density);
             break;
         }
         if (!hit) {
@@ -548,15 +553,12 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         vec3 v = -r.dir;
         r.cone.x += r.cone.y * t_hit;
         Surface s = hit_surface(q, v, r.cone.x, false);
-        float w = 1.0;
-        if (r.pdf == DIFFUSE_BOUNCE && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
-            w = 0.0;
-        } else if (r.pdf > 0.0 && s.emitter_density > 0.0 && pc.total_light_power > 0.0) {
-            float cos_light = abs(dot(s.geometric, r.dir));
-            float density = cos_light > 0.0 ? s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power) : 0.0;
-            w = power_heuristic(r.pdf, density);
+        float density = 0.0;
+        float cos_light = abs(dot(s.geometric, r.dir));
+        if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {
+            density = s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power);
         }
-        radiance += r.throughput * s.emission * w;
+        radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
         radiance += r.throughput * direct_light(s, v, r.pixel, DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth, shadow_rays);
         if (depth + 1u >= pc.max_depth || !next_chain_ray(s, v, depth, r)) break;
     }

@@ -55,14 +55,20 @@ float smith_visibility(float nl, float nv, float a) {
     return d > 0.0 ? 0.5 / d : 0.0;
 }
 
+// The dielectric's reflectance at normal incidence: F0 from the IOR, tinted by the specular colour and kept at
+// most 1, scaled by the specular factor (KHR_materials_specular).
+vec3 dielectric_f0(Shading m) {
+    float r = (m.ior - 1.0) / (m.ior + 1.0);
+    return min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
+}
+
 // The material's Fresnel reflectance at v·h (Schlick), glTF 2.0 Appendix B: the dielectric's (F0 from the
 // IOR, tinted by the specular colour and kept at most 1, F0 and F90 scaled by the specular factor:
 // KHR_materials_specular) and the metal's (F0 the base colour), mixed by metalness. `base_share` is what the
 // dielectric leaves to its base layer (diffuse and transmission): 1 − max(F_dielectric), the extension's
 // fresnel_mix; the metal has no base layer.
 vec3 fresnel(Shading m, float vh, out float base_share) {
-    float r = (m.ior - 1.0) / (m.ior + 1.0);
-    vec3 f0 = min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
+    vec3 f0 = dielectric_f0(m);
     float x = clamp(1.0 - vh, 0.0, 1.0);
     float x2 = x * x;
     float w = x2 * x2 * x;
@@ -114,9 +120,7 @@ float specular_pdf(Shading m, vec3 n, vec3 v, vec3 l) {
 // at least a quarter left to the specular lobe where it has any weight, so glossy reflections stay sampled.
 float diffuse_choice(Shading m) {
     float d = luminance((1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo);
-    float r = (m.ior - 1.0) / (m.ior + 1.0);
-    vec3 f0 = min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
-    float s = luminance(mix(f0, m.albedo, m.metallic)) + luminance((1.0 - m.metallic) * m.transmission * m.albedo);
+    float s = luminance(mix(dielectric_f0(m), m.albedo, m.metallic)) + luminance((1.0 - m.metallic) * m.transmission * m.albedo);
     if (!(d > 0.0)) return 0.0;
     return s > 0.0 ? min(d / (d + s), 0.75) : 1.0;
 }

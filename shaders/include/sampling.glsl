@@ -107,11 +107,15 @@ const uint SOBOL_Y_SALT = 0x68e31da4u;
 // Burley's sampler for one pair of dimensions: the index is shuffled by a nested uniform scramble (which keeps
 // every power-of-two prefix a (0,m,2)-net) and each coordinate is Owen-scrambled with its own seed. Pairs of
 // different dimensions or pixels get independent keys: that is the padding that decorrelates them.
+// sobol_first is also the 1D sampler: an Owen-scrambled van der Corput sequence.
+float sobol_first(uint key, uint shuffled) {
+    return unit_float(nested_uniform_scramble(bitfieldReverse(shuffled), pcg_hash(key ^ SOBOL_X_SALT)));
+}
+
 vec2 sobol_2d(uint key, uint index) {
     uint i = nested_uniform_scramble(index, key);
-    uint x = nested_uniform_scramble(bitfieldReverse(i), pcg_hash(key ^ SOBOL_X_SALT));
     uint y = nested_uniform_scramble(sobol_second_dimension(i), pcg_hash(key ^ SOBOL_Y_SALT));
-    return vec2(unit_float(x), unit_float(y));
+    return vec2(sobol_first(key, i), unit_float(y));
 }
 
 uint strata_per_side(uint count) {
@@ -176,10 +180,7 @@ float sample_1d(uint kind, uint seed, uint pixel, uint index, uint count, uint d
     uint h = pcg_hash(k ^ pcg_hash(index));
     if (kind == SAMPLER_REGULAR) return (float(index % count) + 0.5) / float(count);
     if (kind == SAMPLER_RANDOM) return unit_float(h);
-    if (kind == SAMPLER_SOBOL) {
-        uint i = nested_uniform_scramble(index, k);
-        return unit_float(nested_uniform_scramble(bitfieldReverse(i), pcg_hash(k ^ SOBOL_X_SALT)));
-    }
+    if (kind == SAMPLER_SOBOL) return sobol_first(k, nested_uniform_scramble(index, k));
     return (float(sampling_permute(index % count, count, k)) + unit_float(h)) / float(count);
 }
 #endif

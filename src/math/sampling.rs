@@ -118,9 +118,14 @@ const SOBOL_Y_SALT: u32 = 0x68e3_1da4;
 /// Owen-scrambled with its own seed. Pairs of other dimensions or pixels have other keys: Burley's padding.
 fn sobol_2d(key: u32, index: u32) -> Vec2 {
     let i = nested_uniform_scramble(index, key);
-    let x = nested_uniform_scramble(i.reverse_bits(), pcg_hash(key ^ SOBOL_X_SALT));
     let y = nested_uniform_scramble(sobol_second_dimension(i), pcg_hash(key ^ SOBOL_Y_SALT));
-    Vec2::new(unit_float(x), unit_float(y))
+    Vec2::new(sobol_first(key, i), unit_float(y))
+}
+
+/// The first coordinate of `sobol_2d` for an already shuffled index; alone, the 1D sampler (an Owen-scrambled
+/// van der Corput sequence).
+fn sobol_first(key: u32, shuffled: u32) -> f32 {
+    unit_float(nested_uniform_scramble(shuffled.reverse_bits(), pcg_hash(key ^ SOBOL_X_SALT)))
 }
 
 /// Strata per side for `count` samples: the smallest n with n² ≥ count.
@@ -184,10 +189,7 @@ pub fn sample_1d(kind: SamplerKind, seed: u32, pixel: u32, index: u32, count: u3
     match kind {
         SamplerKind::Regular => ((index % count) as f32 + 0.5) / count as f32,
         SamplerKind::Random => unit_float(h),
-        SamplerKind::Sobol => {
-            let i = nested_uniform_scramble(index, k);
-            unit_float(nested_uniform_scramble(i.reverse_bits(), pcg_hash(k ^ SOBOL_X_SALT)))
-        }
+        SamplerKind::Sobol => sobol_first(k, nested_uniform_scramble(index, k)),
         SamplerKind::Jittered | SamplerKind::MultiJittered => {
             (permute(index % count, count, k) as f32 + unit_float(h)) / count as f32
         }
