@@ -105,3 +105,43 @@ fn an_empty_tlas_is_a_valid_miss_everywhere() {
     let hits = probe.cast(&tlas, &[ray; 3]).unwrap();
     assert!(hits.iter().all(|h| !h.is_hit()), "{hits:?}");
 }
+
+/// Two validated instances alive on two threads crash the validation layer (see `ONE_GPU_AT_A_TIME` in
+/// tests/common/mod.rs), so the harness must never let GPU tests in one process overlap, and a test that asks for a
+/// second `GpuTest` while holding one must be told so rather than wait for itself.
+#[test]
+fn gpu_tests_in_one_process_take_turns() {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static ALIVE: AtomicUsize = AtomicUsize::new(0);
+    static MOST_ALIVE: AtomicUsize = AtomicUsize::new(0);
+    let threads: Vec<_> = (0..3)
+        .map(|_| {
+            std::thread::spawn(|| {
+                for _ in 0..3 {
+                    let gpu = common::GpuTest::raster_only();
+                    let now = ALIVE.fetch_add(1, Ordering::SeqCst) + 1;
+                    MOST_ALIVE.fetch_max(now, Ordering::SeqCst);
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                    ALIVE.fetch_sub(1, Ordering::SeqCst);
+                    gpu.finish().unwrap();
+                }
+            })
+        })
+        .collect();
+    for thread in threads {
+        thread.join().expect("a GPU test thread panicked");
+    }
+    assert_eq!(MOST_ALIVE.load(Ordering::SeqCst), 1, "GPU tests overlapped in one process");
+
+    let first = common::GpuTest::raster_only();
+    let second = std::panic::catch_unwind(common::GpuTest::raster_only);
+    let payload = second.err().expect("a second GpuTest on the same thread must panic");
+    let message =
+        payload.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| payload.downcast_ref::<String>().cloned());
+    let message = message.unwrap_or_default();
+    assert!(
+        message.contains("one GpuTest at a time"),
+        "a second GpuTest on the same thread must panic clearly: {message:?}"
+    );
+    first.finish().unwrap();
+}

@@ -8,6 +8,9 @@ use std::sync::Arc;
 /// What to create.
 #[derive(Debug, Clone, Default)]
 pub struct GpuOptions {
+    /// Load the Khronos validation layer. Keep validated `Gpu`s on different threads from living at the same
+    /// time: the layer Debian 12 ships (1.3.239) shares unlocked state between instances and crashes when one
+    /// thread creates or destroys an instance while another records commands (the test harness takes turns).
     pub validation: bool,
     /// Print validation messages to stderr as they arrive.
     pub echo_messages: bool,

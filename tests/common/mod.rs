@@ -3,18 +3,58 @@
 //! `GpuTest` is dropped it destroys the device, then fails the test if the layer reported any error or warning
 //! that is not on the allow-list (`strata::vk::validation::ALLOWED`), printing ids, text and object names.
 //! A missing layer or ray-query device fails the test with a message that says to run scripts/setup.sh.
+//! Within one test process, GPU tests take turns (see `ONE_GPU_AT_A_TIME`).
 #![allow(dead_code)]
 
 pub mod raycast;
 pub mod scenes;
 
-use std::sync::Arc;
+use std::cell::Cell;
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 use strata::vk::validation::ValidationLog;
 use strata::vk::{Device, DeviceNeeds, Gpu, GpuOptions};
+
+/// Held by each `GpuTest` from before its instance is created until after it is destroyed, so that one test
+/// process never has two validated instances at once. The Khronos validation layer that Debian 12 ships
+/// (1.3.239) keeps state shared between instances that it reads and writes without a lock (its map from
+/// dispatch key to layer data, Vulkan-ValidationLayers issue #4391; the command-buffer label map until 1.3.243,
+/// issue #5172), and `cargo test` runs tests on parallel threads: two GPU tests side by side crashed a test
+/// binary with SIGSEGV inside the layer. Test binaries still run side by side (nextest), as separate processes.
+static ONE_GPU_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+thread_local! {
+    /// Whether this thread holds `ONE_GPU_AT_A_TIME`: a test that asks for a second `GpuTest` while holding
+    /// one gets a clear panic instead of waiting for itself forever.
+    static HOLDS_THE_GPU: Cell<bool> = const { Cell::new(false) };
+}
+
+/// This thread's turn at the GPU; dropping it hands the turn on.
+struct GpuTurn(MutexGuard<'static, ()>);
+
+impl GpuTurn {
+    fn take() -> Self {
+        assert!(
+            !HOLDS_THE_GPU.get(),
+            "a test holds one GpuTest at a time: finish or drop the first before creating another"
+        );
+        // A test that panicked while holding the turn poisons the lock; the device it held is gone by then.
+        let guard = ONE_GPU_AT_A_TIME.lock().unwrap_or_else(PoisonError::into_inner);
+        HOLDS_THE_GPU.set(true);
+        Self(guard)
+    }
+}
+
+impl Drop for GpuTurn {
+    fn drop(&mut self) {
+        HOLDS_THE_GPU.set(false);
+    }
+}
 
 pub struct GpuTest {
     gpu: Option<Gpu>,
     log: Arc<ValidationLog>,
+    /// Last, so that it is released after the device and instance are destroyed.
+    _turn: GpuTurn,
 }
 
 impl GpuTest {
@@ -30,6 +70,7 @@ impl GpuTest {
     }
 
     fn with(needs: DeviceNeeds) -> Self {
+        let turn = GpuTurn::take();
         let options = GpuOptions {
             validation: true,
             echo_messages: false,
@@ -39,7 +80,7 @@ impl GpuTest {
         match Gpu::new(&options) {
             Ok(gpu) => {
                 let log = gpu.validation_log();
-                Self { gpu: Some(gpu), log }
+                Self { gpu: Some(gpu), log, _turn: turn }
             }
             Err(e) => panic!(
                 "GPU tests need the Khronos validation layer and a Vulkan device with VK_KHR_ray_query.\n\
