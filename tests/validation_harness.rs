@@ -145,3 +145,27 @@ fn gpu_tests_in_one_process_take_turns() {
     );
     first.finish().unwrap();
 }
+
+/// A crash inside the driver or the layer ends the whole test binary; the message on stderr names the test that
+/// held the GPU. The test runs itself as a child process that takes the GPU and raises the signal a crash would.
+#[test]
+fn a_crash_names_the_gpu_test_that_held_the_device() {
+    use std::os::unix::process::ExitStatusExt as _;
+    const NAME: &str = "a_crash_names_the_gpu_test_that_held_the_device";
+    const CHILD: &str = "STRATA_TEST_CRASH_ON_PURPOSE";
+    if std::env::var_os(CHILD).is_some() {
+        let _gpu = common::GpuTest::raster_only();
+        // SAFETY: raising a signal is sound; the harness's handler names it and lets it end the process.
+        unsafe { libc::raise(libc::SIGSEGV) };
+        unreachable!("SIGSEGV ends the process");
+    }
+    let out = std::process::Command::new(std::env::current_exe().unwrap())
+        .args([NAME, "--exact", "--nocapture"])
+        .env(CHILD, "1")
+        .output()
+        .expect("run this test binary again");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.signal(), Some(libc::SIGSEGV), "the signal must still end the child: {stderr}");
+    let named = format!("strata: crashed with SIGSEGV while running the GPU test `{NAME}`");
+    assert!(stderr.contains(&named), "stderr must say {named:?}:\n{stderr}");
+}

@@ -10,7 +10,7 @@ pub mod raycast;
 pub mod scenes;
 
 use std::cell::Cell;
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex, MutexGuard, Once, PoisonError};
 use strata::vk::validation::ValidationLog;
 use strata::vk::{Device, DeviceNeeds, Gpu, GpuOptions};
 
@@ -40,14 +40,32 @@ impl GpuTurn {
         // A test that panicked while holding the turn poisons the lock; the device it held is gone by then.
         let guard = ONE_GPU_AT_A_TIME.lock().unwrap_or_else(PoisonError::into_inner);
         HOLDS_THE_GPU.set(true);
+        name_the_test_in_crash_messages();
         Self(guard)
     }
 }
 
 impl Drop for GpuTurn {
     fn drop(&mut self) {
+        strata::fatal_signals::set_running(None);
         HOLDS_THE_GPU.set(false);
     }
+}
+
+/// A crash inside the driver or the layer ends the whole test binary, and `cargo test` then says only "signal: 11"
+/// with no test name. GPU tests take turns, so the test holding the turn is the one that crashed: the message
+/// names it (libtest names each test's thread after the test).
+fn name_the_test_in_crash_messages() {
+    static INSTALL: Once = Once::new();
+    INSTALL.call_once(|| {
+        strata::fatal_signals::report_fatal_signals_with(
+            "GPU tests take turns, so this test held the only device in the process. Run it alone with \
+             `cargo test --test <file> <test name> -- --exact`, or under gdb for a backtrace.",
+        )
+    });
+    let thread = std::thread::current();
+    let test = thread.name().unwrap_or("an unnamed test thread");
+    strata::fatal_signals::set_running(Some(&format!("the GPU test `{test}`")));
 }
 
 pub struct GpuTest {
