@@ -98,10 +98,19 @@ fn every_scene_and_sample_model_renders_finite_pixels() {
     assert!(paths.len() >= 10, "found only {paths:?}");
     for path in &paths {
         let scene = load(path);
-        for primary in [Primary::Raster, Primary::Rays] {
-            let s = RenderSettings { primary, ..settings(48, 32, 2, SamplerKind::Jittered) };
+        // Both primary modes, each once with the default picture settings and once with diffuse bounces and a
+        // better sampler (the paths and sample points that only those options reach).
+        let configurations = [
+            (Primary::Raster, SamplerKind::Jittered, false),
+            (Primary::Rays, SamplerKind::Jittered, false),
+            (Primary::Raster, SamplerKind::Sobol, true),
+            (Primary::Rays, SamplerKind::MultiJittered, true),
+        ];
+        for (primary, sampler, indirect) in configurations {
+            let s = RenderSettings { primary, indirect, ..settings(48, 32, 2, sampler) };
             let frame = render(gpu.device(), &scene, &s);
-            assert_finite(&frame, &format!("{} ({})", path.display(), primary.name()));
+            let what = format!("{} ({}, {sampler:?}, indirect {indirect})", path.display(), primary.name());
+            assert_finite(&frame, &what);
         }
     }
     gpu.finish().unwrap();
