@@ -16,10 +16,10 @@ use strata::vk::{Device, DeviceNeeds, Gpu, GpuOptions};
 
 /// Held by each `GpuTest` from before its instance is created until after it is destroyed, so that one test
 /// process never has two validated instances at once. The Khronos validation layer that Debian 12 ships
-/// (1.3.239) keeps state shared between instances that it reads and writes without a lock (its map from
-/// dispatch key to layer data, Vulkan-ValidationLayers issue #4391; the command-buffer label map until 1.3.243,
-/// issue #5172), and `cargo test` runs tests on parallel threads: two GPU tests side by side crashed a test
-/// binary with SIGSEGV inside the layer. Test binaries still run side by side (nextest), as separate processes.
+/// (1.3.239) keeps state shared between instances that it reads and writes without a lock (its global map from
+/// dispatch key to layer data, Vulkan-ValidationLayers issue #4391), and `cargo test` runs tests on parallel
+/// threads: two GPU tests side by side crashed a test binary with SIGSEGV inside the layer
+/// (`examples/validation_layer_race.rs` reproduces it). Test binaries still run side by side (nextest), as separate processes.
 static ONE_GPU_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 thread_local! {
