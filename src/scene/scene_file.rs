@@ -150,6 +150,15 @@ impl Source<'_> {
         }
     }
 
+    /// An optional whole number in `lo..=hi`, or an error at its position.
+    fn count_in_range(&self, v: &Option<S<u32>>, what: &str, lo: u32, hi: u32) -> Result<Option<u32>> {
+        match v {
+            Some(n) if (lo..=hi).contains(n.get_ref()) => Ok(Some(*n.get_ref())),
+            Some(n) => Err(self.error(n.span(), format!("{what} = {} is out of range ({lo} to {hi})", n.get_ref()))),
+            None => Ok(None),
+        }
+    }
+
     fn positive(&self, v: &S<f32>, what: &str) -> Result<f32> {
         let x = *v.get_ref();
         if x.is_finite() && x > 0.0 {
@@ -579,22 +588,6 @@ fn apply_bumps(source: &Source<'_>, bumps: &[BumpSection], scene: &mut Scene) ->
 }
 
 fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result<SettingsOverrides> {
-    let side = |v: &Option<S<u32>>, what: &str| -> Result<Option<u32>> {
-        match v {
-            Some(s) if (1..=MAX_IMAGE_SIDE).contains(s.get_ref()) => Ok(Some(*s.get_ref())),
-            Some(s) => {
-                Err(source.error(s.span(), format!("{what} = {} is out of range (1 to {MAX_IMAGE_SIDE})", s.get_ref())))
-            }
-            None => Ok(None),
-        }
-    };
-    let spp = match &r.spp {
-        Some(s) if (1..=MAX_SPP).contains(s.get_ref()) => Some(*s.get_ref()),
-        Some(s) => {
-            return Err(source.error(s.span(), format!("spp = {} is out of range (1 to {MAX_SPP})", s.get_ref())))
-        }
-        None => None,
-    };
     let sampler = r
         .sampler
         .as_ref()
@@ -615,9 +608,9 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         None => None,
     };
     Ok(SettingsOverrides {
-        width: side(&r.width, "width")?,
-        height: side(&r.height, "height")?,
-        spp,
+        width: source.count_in_range(&r.width, "width", 1, MAX_IMAGE_SIDE)?,
+        height: source.count_in_range(&r.height, "height", 1, MAX_IMAGE_SIDE)?,
+        spp: source.count_in_range(&r.spp, "spp", 1, MAX_SPP)?,
         sampler,
         seed: r.seed,
         background,
@@ -625,15 +618,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         tone_map,
         primary,
         indirect: r.indirect,
-        bounces: match &r.bounces {
-            Some(b) if *b.get_ref() <= MAX_BOUNCES => Some(*b.get_ref()),
-            Some(b) => {
-                return Err(
-                    source.error(b.span(), format!("bounces = {} is out of range (0 to {MAX_BOUNCES})", b.get_ref()))
-                )
-            }
-            None => None,
-        },
+        bounces: source.count_in_range(&r.bounces, "bounces", 0, MAX_BOUNCES)?,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
 }
