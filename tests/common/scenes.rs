@@ -71,6 +71,8 @@ pub fn ortho_down(center: Vec3, height: f32, half_height: f32) -> Camera {
     }
 }
 
+/// Small test frames: seed 7, a black background and the clamp tone map (linear values stay readable); every
+/// other setting as `strata render` defaults it.
 pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> RenderSettings {
     RenderSettings {
         width,
@@ -79,18 +81,19 @@ pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> Rend
         sampler,
         seed: 7,
         background: Vec3::ZERO,
-        exposure: 0.0,
         tone_map: ToneMap::Clamp,
-        primary: strata::scene::settings::Primary::Raster,
-        indirect: false,
-        bounces: 3,
-        output: None,
+        ..RenderSettings::default()
     }
 }
 
 pub fn render(device: &Arc<Device>, scene: &Scene, settings: &RenderSettings) -> RenderedFrame {
     let on_gpu = SceneOnGpu::upload(device, scene).expect("upload");
     render_frame(device, scene, &on_gpu, settings, &FrameOptions::default(), &mut |_, _| true).expect("render")
+}
+
+/// Mean red radiance over the whole frame.
+pub fn mean_red(frame: &RenderedFrame) -> f32 {
+    frame.linear.pixels.iter().map(|p| p[0]).sum::<f32>() / frame.linear.pixels.len() as f32
 }
 
 /// Mean red radiance of each column over rows `rows`.
