@@ -96,20 +96,15 @@ fn every_scene_and_sample_model_renders_finite_pixels() {
     );
     paths.sort();
     assert!(paths.len() >= 10, "found only {paths:?}");
-    for (index, path) in paths.iter().enumerate() {
+    for path in &paths {
         let scene = load(path);
-        // Both primary modes with the default picture settings, then diffuse bounces with a better sampler (the
-        // paths and sample points only those options reach) in one mode, the scenes taking the two in turn:
-        // every render compiles its pipelines, and a fourth render per scene would add a minute to the suite.
-        let with_bounces = if index % 2 == 0 {
-            (Primary::Raster, SamplerKind::Sobol, true)
-        } else {
-            (Primary::Rays, SamplerKind::MultiJittered, true)
-        };
+        // Both primary modes with the default picture settings, then both with diffuse bounces and a better
+        // sampler (the paths and sample points only those options reach).
         let configurations = [
             (Primary::Raster, SamplerKind::Jittered, false),
             (Primary::Rays, SamplerKind::Jittered, false),
-            with_bounces,
+            (Primary::Raster, SamplerKind::Sobol, true),
+            (Primary::Rays, SamplerKind::MultiJittered, true),
         ];
         for (primary, sampler, indirect) in configurations {
             let s = RenderSettings { primary, indirect, ..settings(48, 32, 2, sampler) };
@@ -379,6 +374,24 @@ fn assert_renders_alike_in_both_modes(gpu: &GpuTest, textured: &Scene, factors: 
         assert!(with_texture == with_factors, "{primary:?}: the texture does not act as {what}");
         assert!(with_factors != untouched, "{primary:?}: {what} does not show in this picture");
     }
+}
+
+/// A second frame on the same device builds no pipeline of its own (the device keeps them) and is the first
+/// frame bit for bit.
+#[test]
+fn a_second_frame_on_one_device_reuses_the_pipelines_and_matches_the_first() {
+    let gpu = GpuTest::new();
+    let scene = load(&repo("scenes/cornell.toml"));
+    let s = settings(48, 32, 2, SamplerKind::Jittered);
+    let first = render(gpu.device(), &scene, &s);
+    let kept = gpu.device().kept_compute_pipelines().len();
+    let second = render(gpu.device(), &scene, &s);
+    assert_eq!(gpu.device().kept_compute_pipelines().len(), kept, "the second frame built a compute pipeline");
+    assert!(first.linear == second.linear && first.display == second.display, "the frames differ");
+    let traced = render(gpu.device(), &scene, &RenderSettings { primary: Primary::Rays, ..s });
+    assert_eq!(gpu.device().kept_compute_pipelines().len(), kept + 1, "the reference mode is its own pipeline");
+    assert!(traced.linear != first.linear, "the reference mode rendered the raster frame");
+    gpu.finish().unwrap();
 }
 
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction

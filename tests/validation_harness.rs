@@ -106,6 +106,43 @@ fn an_empty_tlas_is_a_valid_miss_everywhere() {
     assert!(hits.iter().all(|h| !h.is_hit()), "{hits:?}");
 }
 
+/// Compute pipelines are built once per device and request, shared by every pass that asks again, outlive the
+/// passes that asked, and go with the device: a later pass uses the kept pipeline cleanly and nothing leaks.
+#[test]
+fn a_device_builds_each_compute_pipeline_once_and_destroys_it_with_itself() {
+    use strata::vk::pipeline::{Binding, Pipeline};
+    let gpu = common::GpuTest::new();
+    let device = gpu.device();
+    let kept = || device.kept_compute_pipelines().len();
+    let bindings = [
+        Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
+        Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
+        Binding::new(2, vk::DescriptorType::STORAGE_BUFFER),
+    ];
+    let shader = ("ray_probe.comp", strata::shaders::RAY_PROBE_COMP);
+    let before = kept();
+    let first = Pipeline::compute(device, "kept probe", shader, &bindings, 4).unwrap();
+    assert_eq!(kept(), before + 1, "the first request builds a pipeline");
+    let again = Pipeline::compute(device, "kept probe", shader, &bindings, 4).unwrap();
+    assert_eq!(kept(), before + 1, "the same request builds nothing new");
+    assert_eq!((again.raw, again.layout, again.set_layout), (first.raw, first.layout, first.set_layout));
+    let wider = Pipeline::compute(device, "kept probe", shader, &bindings, 8).unwrap();
+    assert_eq!(kept(), before + 2, "a different push-constant range is a different pipeline");
+    assert_ne!(wider.raw, first.raw);
+    drop((first, again, wider));
+    assert_eq!(kept(), before + 2, "dropping the passes' handles leaves the device's pipelines");
+
+    // A pass whose pipeline an earlier, dropped pass asked for first still casts rays.
+    let tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();
+    drop(RayProbe::new(device).unwrap());
+    let probe = RayProbe::new(device).unwrap();
+    let ray = strata::render::ray_probe::ProbeRay::closest(Vec3::ZERO, Vec3::Z, 0.0, 1e9);
+    assert!(probe.cast(&tlas, &[ray; 3]).unwrap().iter().all(|h| !h.is_hit()));
+    drop((probe, tlas));
+    // The harness fails the test on any message at teardown, a kept pipeline that leaked included.
+    gpu.finish().unwrap();
+}
+
 /// Two validated instances alive on two threads crash the validation layer (see `ONE_GPU_AT_A_TIME` in
 /// tests/common/mod.rs), so the harness must never let GPU tests in one process overlap, and a test that asks for a
 /// second `GpuTest` while holding one must be told so rather than wait for itself.

@@ -1,4 +1,5 @@
-//! The frame: joins the CPU scene to Vulkan. Each pass owns its pipeline and records into a command buffer.
+//! The frame: joins the CPU scene to Vulkan. Each pass holds its pipeline (compute pipelines are kept by the device
+//! and shared by every frame on it) and records into a command buffer.
 pub mod accumulate;
 pub mod accumulate_layout;
 pub mod aov;

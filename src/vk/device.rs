@@ -1,6 +1,7 @@
 //! Physical device selection (ray queries required for rendering; discrete, then integrated, then CPU) and the
 //! logical device that owns the queue, the allocator and the extension loaders.
 use super::instance::{version_string, Instance, API_VERSION};
+use super::pipeline::KeptComputePipelines;
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -274,6 +275,7 @@ pub struct Device {
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
     allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) command_pool: Mutex<vk::CommandPool>,
+    compute_pipelines: Mutex<KeptComputePipelines>,
     pub instance: Arc<Instance>,
 }
 
@@ -383,6 +385,7 @@ impl Device {
             debug_utils,
             allocator: Mutex::new(ManuallyDrop::new(allocator)),
             command_pool: Mutex::new(command_pool),
+            compute_pipelines: Mutex::new(KeptComputePipelines::default()),
             instance,
         });
         device.set_name(device.raw.handle(), &format!("strata device ({})", device.report.name));
@@ -412,6 +415,11 @@ impl Device {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    /// The compute pipelines this device keeps (`Pipeline::compute_specialized`).
+    pub fn kept_compute_pipelines(&self) -> MutexGuard<'_, KeptComputePipelines> {
+        self.compute_pipelines.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
     pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
         self.queue.lock().unwrap_or_else(|p| p.into_inner())
     }
@@ -429,6 +437,7 @@ impl Drop for Device {
             let _ = self.raw.device_wait_idle();
             let pool = *self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner());
             self.raw.destroy_command_pool(pool, None);
+            self.compute_pipelines.get_mut().unwrap_or_else(|p| p.into_inner()).destroy_all(&self.raw);
             // The allocator frees its memory blocks; it must go before the device.
             ManuallyDrop::drop(self.allocator.get_mut().unwrap_or_else(|p| p.into_inner()));
             self.raw.destroy_device(None);

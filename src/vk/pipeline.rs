@@ -1,9 +1,11 @@
 //! Pipelines built from the embedded SPIR-V: shader modules, one descriptor-set layout and push-constant range
-//! per pipeline, compute pipelines and dynamic-rendering graphics pipelines. A pass owns its pipeline.
+//! per pipeline, compute pipelines and dynamic-rendering graphics pipelines. A pass owns its graphics pipeline;
+//! compute pipelines are kept by the device (`KeptComputePipelines`) and shared by every pass that asks for the same.
 use super::descriptors::DescriptorSet;
 use super::device::Device;
 use anyhow::{anyhow, Context as _, Result};
 use ash::vk;
+use std::collections::HashMap;
 use std::ffi::CStr;
 use std::sync::Arc;
 
@@ -60,7 +62,55 @@ pub struct Pipeline {
     pub bindings: Vec<Binding>,
     pub push_constant_size: u32,
     pub name: String,
+    /// The handles belong to the device's `KeptComputePipelines`, which destroys them with the device.
+    kept_by_device: bool,
     device: Arc<Device>,
+}
+
+/// Everything a compute pipeline is built from: two requests with equal keys get the same pipeline.
+#[derive(PartialEq, Eq, Hash)]
+struct ComputeKey {
+    name: String,
+    spirv: Vec<u8>,
+    bindings: Vec<(u32, vk::DescriptorType, u32)>,
+    push_constant_size: u32,
+    constants: Vec<u32>,
+}
+
+#[derive(Clone, Copy)]
+struct KeptHandles {
+    raw: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    set_layout: vk::DescriptorSetLayout,
+}
+
+/// The compute pipelines a device keeps until it is destroyed. Building one is the costly part of a pass on
+/// lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about 0.8 s, 2 s under
+/// the validation layer, which checks the SPIR-V again), and every render builds its passes anew; kept, a program
+/// that renders many frames on one device (an animation, the benchmark, the test suite) builds each variant once.
+#[derive(Default)]
+pub struct KeptComputePipelines(HashMap<ComputeKey, KeptHandles>);
+
+impl KeptComputePipelines {
+    /// How many distinct compute pipelines the device holds.
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// Destroys every kept pipeline; only while the device is being destroyed, when no pass can use them.
+    pub(crate) unsafe fn destroy_all(&mut self, device: &ash::Device) {
+        for (_, h) in self.0.drain() {
+            unsafe {
+                device.destroy_pipeline(h.raw, None);
+                device.destroy_pipeline_layout(h.layout, None);
+                device.destroy_descriptor_set_layout(h.set_layout, None);
+            }
+        }
+    }
 }
 
 /// Fixed state of a graphics pipeline; viewport and scissor are dynamic.
@@ -133,8 +183,49 @@ impl Pipeline {
     }
 
     /// A compute pipeline whose 32-bit specialization constants `constant_id = i` take `constants[i]`: the
-    /// driver compiles the branches they switch off out of the pipeline.
+    /// driver compiles the branches they switch off out of the pipeline. Built once per device for each distinct
+    /// request and kept (`KeptComputePipelines`); later requests share it.
     pub fn compute_specialized(
+        device: &Arc<Device>,
+        name: &str,
+        shader: (&str, &[u8]),
+        bindings: &[Binding],
+        push_constant_size: u32,
+        constants: &[u32],
+    ) -> Result<Self> {
+        let key = ComputeKey {
+            name: name.to_owned(),
+            spirv: shader.1.to_vec(),
+            bindings: bindings.iter().map(|b| (b.binding, b.kind, b.count)).collect(),
+            push_constant_size,
+            constants: constants.to_vec(),
+        };
+        // Held while building, so that two threads asking for the same pipeline build it once.
+        let mut kept = device.kept_compute_pipelines();
+        let handles = match kept.0.get(&key) {
+            Some(handles) => *handles,
+            None => {
+                let mut built = Self::build_compute(device, name, shader, bindings, push_constant_size, constants)?;
+                built.kept_by_device = true;
+                let handles = KeptHandles { raw: built.raw, layout: built.layout, set_layout: built.set_layout };
+                kept.0.insert(key, handles);
+                return Ok(built);
+            }
+        };
+        Ok(Self {
+            raw: handles.raw,
+            layout: handles.layout,
+            set_layout: handles.set_layout,
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            bindings: bindings.to_vec(),
+            push_constant_size,
+            name: name.to_owned(),
+            kept_by_device: true,
+            device: device.clone(),
+        })
+    }
+
+    fn build_compute(
         device: &Arc<Device>,
         name: &str,
         shader: (&str, &[u8]),
@@ -152,6 +243,7 @@ impl Pipeline {
             bindings: bindings.to_vec(),
             push_constant_size,
             name: name.to_owned(),
+            kept_by_device: false,
             device: device.clone(),
         };
         let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
@@ -187,6 +279,7 @@ impl Pipeline {
             bindings: desc.bindings.to_vec(),
             push_constant_size: desc.push_constant_size,
             name: desc.name.to_owned(),
+            kept_by_device: false,
             device: device.clone(),
         };
         let stages = [
@@ -277,6 +370,9 @@ impl Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
+        if self.kept_by_device {
+            return;
+        }
         unsafe {
             self.device.raw.destroy_pipeline(self.raw, None);
             self.device.raw.destroy_pipeline_layout(self.layout, None);
