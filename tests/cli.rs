@@ -314,6 +314,20 @@ fn a_render_prints_a_json_summary_and_writes_png_and_exr() {
     assert_eq!((&indirect["indirect"], &indirect["bounces"]), (&serde_json::json!(true), &serde_json::json!(3)));
     let (with, without) = (indirect["secondary_rays"].as_u64().unwrap(), summary["secondary_rays"].as_u64().unwrap());
     assert!(with > without + 64 * 40, "secondary rays: {with} with --indirect, {without} without");
+
+    // A scene file that turns it on; --no-indirect turns it off again, and the last of the two flags wins.
+    let dir_scene = dir.join("indirect.toml");
+    let text = std::fs::read_to_string(scene).unwrap();
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/soft-shadows.gltf");
+    let text = text.replace("\"soft-shadows.gltf\"", &format!("{:?}", gltf.to_str().unwrap()));
+    std::fs::write(&dir_scene, text.replace("[render]", "[render]\nindirect = true")).unwrap();
+    let args = ["render", dir_scene.to_str().unwrap(), "-o", png, "--size", "64x40", "--spp", "4", "--json", "--quiet"];
+    for (flags, expected) in [(&[][..], true), (&["--no-indirect"], false), (&["--no-indirect", "--indirect"], true)] {
+        let out = strata(&[&args[..], flags].concat());
+        assert!(out.status.success(), "{flags:?}: {}", outcome(&out));
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+        assert_eq!(summary["indirect"], expected, "{flags:?}");
+    }
 }
 
 #[test]

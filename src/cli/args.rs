@@ -98,8 +98,12 @@ pub struct RenderArgs {
     /// Also follow paths by the diffuse lobe: light bouncing between diffuse surfaces (Kajiya 1986), up to
     /// --bounces times with Russian roulette, on top of Cook's effects. Slower and noisier; off by default, or as
     /// the scene file's `indirect` says.
-    #[arg(long)]
+    #[arg(long, overrides_with = "no_indirect")]
     pub indirect: bool,
+    /// Cook's effects alone, where the scene file's `indirect = true` turns diffuse interreflection on (the last
+    /// of --indirect and --no-indirect wins).
+    #[arg(long, overrides_with = "indirect")]
+    pub no_indirect: bool,
     /// Most bounces after the visible surface: gloss and translucency rays, and diffuse ones with --indirect. 0 is
     /// direct light alone; 3 sees through a glass sphere [default: the scene file's, else 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]

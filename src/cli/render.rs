@@ -39,7 +39,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         exposure: args.exposure,
         tone_map: args.tone_map,
         primary: args.primary,
-        indirect: args.indirect.then_some(true),
+        indirect: if args.indirect { Some(true) } else { args.no_indirect.then_some(false) },
         bounces: args.bounces,
         output: args.output.clone(),
     };
