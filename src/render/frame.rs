@@ -154,8 +154,10 @@ fn sampler_index(kind: SamplerKind) -> u32 {
 
 const TIMESTAMPS_PER_SAMPLE: u32 = 4;
 
-/// Renders `settings.spp` samples of `scene` and resolves them. `progress(done, total)` is called after each
-/// batch; returning `false` stops the render with [`Interrupted`] (everything is freed on the way out).
+/// Renders `settings.spp` samples of `scene` and resolves them. `progress(done, total)` is called once with
+/// `done = 0` when the passes are built and sampling starts, then after each batch (on lavapipe the first batch
+/// also compiles the shaders, half a minute or more on a machine whose Mesa shader cache lacks them); returning
+/// `false` stops the render with [`Interrupted`] (everything is freed on the way out).
 pub fn render_frame(
     device: &Arc<Device>,
     scene: &Scene,
@@ -244,6 +246,9 @@ pub fn render_frame(
     let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
     let mut done = 0u32;
     let mut skipped_warned = false;
+    if !progress(0, spp) {
+        return Err(Interrupted.into());
+    }
     while done < spp {
         let count = batch.min(spp - done);
         // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
