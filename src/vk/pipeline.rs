@@ -205,11 +205,9 @@ impl Pipeline {
         let handles = match kept.0.get(&key) {
             Some(handles) => *handles,
             None => {
-                let mut built = Self::build_compute(device, name, shader, bindings, push_constant_size, constants)?;
-                built.kept_by_device = true;
-                let handles = KeptHandles { raw: built.raw, layout: built.layout, set_layout: built.set_layout };
+                let handles = Self::build_compute(device, &key, shader.0, bindings)?;
                 kept.0.insert(key, handles);
-                return Ok(built);
+                handles
             }
         };
         Ok(Self {
@@ -225,27 +223,29 @@ impl Pipeline {
         })
     }
 
+    /// Builds the pipeline `key` asks for, its handles for the device to keep.
     fn build_compute(
         device: &Arc<Device>,
-        name: &str,
-        shader: (&str, &[u8]),
+        key: &ComputeKey,
+        shader_name: &str,
         bindings: &[Binding],
-        push_constant_size: u32,
-        constants: &[u32],
-    ) -> Result<Self> {
-        let module = ShaderModule::new(device, shader.0, shader.1)?;
-        let (set_layout, layout) = Self::new_layout(device, name, bindings, push_constant_size)?;
+    ) -> Result<KeptHandles> {
+        let name = key.name.as_str();
+        let module = ShaderModule::new(device, shader_name, &key.spirv)?;
+        let (set_layout, layout) = Self::new_layout(device, name, bindings, key.push_constant_size)?;
+        // Owns the layouts until the pipeline exists, so that a failure below destroys them.
         let mut pipeline = Self {
             raw: vk::Pipeline::null(),
             layout,
             set_layout,
             bind_point: vk::PipelineBindPoint::COMPUTE,
             bindings: bindings.to_vec(),
-            push_constant_size,
+            push_constant_size: key.push_constant_size,
             name: name.to_owned(),
             kept_by_device: false,
             device: device.clone(),
         };
+        let constants = key.constants.as_slice();
         let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
             .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
             .collect();
@@ -263,7 +263,8 @@ impl Pipeline {
             .map_err(|(_, e)| anyhow!(e))
             .with_context(|| format!("vkCreateComputePipelines {name}"))?[0];
         device.set_name(pipeline.raw, name);
-        Ok(pipeline)
+        pipeline.kept_by_device = true;
+        Ok(KeptHandles { raw: pipeline.raw, layout, set_layout })
     }
 
     /// A graphics pipeline for dynamic rendering.
