@@ -378,7 +378,7 @@ Surface hit_surface(rayQueryEXT q, vec3 v, float cone_width, const bool visible)
             transform_derivatives(m.normal_uv_rows, map_dpdu, map_dpdv);
             n = normal_from_texture(n, map_dpdu, map_dpdv, texel, m.normal_scale);
         }
-        if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_height_and_gradient(m.bump, uv).yz);
+        if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_gradient(m.bump, uv));
         s.normal = n;
     }
     // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.

@@ -1,13 +1,14 @@
 #version 460
-// Evaluates noise, fBm and turbulence with gradients at points from a buffer: the GPU side of the
-// noise twin test (src/math/noise.rs).
+// Evaluates noise, fBm and turbulence with gradients, and their value-only forms, at points from a buffer: the
+// GPU side of the noise twin test (src/math/noise.rs).
 #extension GL_EXT_scalar_block_layout : require
 #include "noise.glsl"
 
 layout(local_size_x = 64) in;
 
 layout(set = 0, binding = 0, scalar) readonly buffer Points { vec4 points[]; };
-// Three results per point: noise, fBm, turbulence (value in w, gradient in xyz).
+// Four results per point: noise, fBm, turbulence (value in w, gradient in xyz), then the three value-only
+// functions' results in xyz.
 layout(set = 0, binding = 1, scalar) writeonly buffer Results { vec4 results[]; };
 layout(push_constant) uniform NoiseProbePush {
     uint count;
@@ -20,7 +21,9 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= pc.count) return;
     vec3 p = points[i].xyz;
-    results[3 * i + 0] = noise_with_gradient(p);
-    results[3 * i + 1] = fbm_with_gradient(p, pc.octaves, pc.lacunarity, pc.gain);
-    results[3 * i + 2] = turbulence_with_gradient(p, pc.octaves, pc.lacunarity, pc.gain);
+    results[4 * i + 0] = noise_with_gradient(p);
+    results[4 * i + 1] = fbm_with_gradient(p, pc.octaves, pc.lacunarity, pc.gain);
+    results[4 * i + 2] = turbulence_with_gradient(p, pc.octaves, pc.lacunarity, pc.gain);
+    results[4 * i + 3] = vec4(noise_value(p), fbm_value(p, pc.octaves, pc.lacunarity, pc.gain),
+                              turbulence_value(p, pc.octaves, pc.lacunarity, pc.gain), 0.0);
 }

@@ -43,21 +43,42 @@ vec4 bump_field(Bump b, vec2 uv) {
     return vec4(n.x * b.frequency, n.y * b.frequency, n.z * b.frequency, n.w);
 }
 
-float bump_height(Bump b, vec2 uv) {
-    return b.amplitude * bump_field(b, uv).w;
+// The field's value alone at uv before the amplitude: bump_field(b, uv).w, without the gradient's work.
+float bump_field_value(Bump b, vec2 uv) {
+    vec3 p = vec3(uv * b.frequency, 0.0);
+    if (b.kind == BUMP_NOISE) return noise_value(p);
+    if (b.kind == BUMP_FBM) return fbm_value(p, b.octaves, b.lacunarity, b.gain);
+    if (b.kind == BUMP_TURBULENCE) return turbulence_value(p, b.octaves, b.lacunarity, b.gain);
+    const float TAU = 6.28318530717958647692;
+    return sin(TAU * p.x);
 }
 
-// (B, B_u, B_v): the height and its gradient, by central differences with step epsilon (five field
-// evaluations) or analytically (one).
+float bump_height(Bump b, vec2 uv) {
+    return b.amplitude * bump_field_value(b, uv);
+}
+
+// (B_u, B_v) by central differences with step epsilon: four evaluations of the field's value.
+vec2 bump_central_differences(Bump b, vec2 uv) {
+    float e = b.epsilon;
+    float du = bump_height(b, uv + vec2(e, 0.0)) - bump_height(b, uv - vec2(e, 0.0));
+    float dv = bump_height(b, uv + vec2(0.0, e)) - bump_height(b, uv - vec2(0.0, e));
+    return vec2(du, dv) / (2.0 * e);
+}
+
+// (B, B_u, B_v): the height and its gradient, by central differences (five field evaluations) or analytically
+// (one).
 vec3 bump_height_and_gradient(Bump b, vec2 uv) {
     if (b.derivative == BUMP_ANALYTIC) {
         vec4 f = bump_field(b, uv);
         return b.amplitude * vec3(f.w, f.xy);
     }
-    float e = b.epsilon;
-    float du = bump_height(b, uv + vec2(e, 0.0)) - bump_height(b, uv - vec2(e, 0.0));
-    float dv = bump_height(b, uv + vec2(0.0, e)) - bump_height(b, uv - vec2(0.0, e));
-    return vec3(bump_height(b, uv), vec2(du, dv) / (2.0 * e));
+    return vec3(bump_height(b, uv), bump_central_differences(b, uv));
+}
+
+// (B_u, B_v) alone, for shading that never reads the height (ray hits): central differences skip B itself.
+vec2 bump_gradient(Bump b, vec2 uv) {
+    if (b.derivative == BUMP_ANALYTIC) return b.amplitude * bump_field(b, uv).xy;
+    return bump_central_differences(b, uv);
 }
 
 // Blinn's perturbed normal; degenerate derivatives or a zero normal give the unperturbed normal, never NaN.

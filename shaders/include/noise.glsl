@@ -77,6 +77,55 @@ vec4 noise_with_gradient(vec3 p) {
     return vec4(blended + weights, value);
 }
 
+// The noise value alone: noise_with_gradient's value by the same operations (so the same bits), without the
+// gradient's blends, for callers that difference values (central-difference bump mapping evaluates four).
+float noise_value(vec3 p) {
+    vec3 cell = floor(p);
+    ivec3 c = ivec3(cell);
+    vec3 f = p - cell;
+    float u = noise_fade(f.x).x, v = noise_fade(f.y).x, w = noise_fade(f.z).x;
+    float n0 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(0, 0, 0))), f);
+    float n1 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 0, 0))), f - vec3(1, 0, 0));
+    float n2 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(0, 1, 0))), f - vec3(0, 1, 0));
+    float n3 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 1, 0))), f - vec3(1, 1, 0));
+    float n4 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(0, 0, 1))), f - vec3(0, 0, 1));
+    float n5 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 0, 1))), f - vec3(1, 0, 1));
+    float n6 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(0, 1, 1))), f - vec3(0, 1, 1));
+    float n7 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 1, 1))), f - vec3(1, 1, 1));
+    float k0 = n0;
+    float k1 = n1 - n0;
+    float k2 = n2 - n0;
+    float k3 = n4 - n0;
+    float k4 = n0 - n1 - n2 + n3;
+    float k5 = n0 - n2 - n4 + n6;
+    float k6 = n0 - n1 - n4 + n5;
+    float k7 = -n0 + n1 + n2 - n3 + n4 - n5 - n6 + n7;
+    return k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+}
+
+// fbm_with_gradient's and turbulence_with_gradient's values alone, by the same operations.
+float fbm_value(vec3 p, uint octaves, float lacunarity, float gain) {
+    float sum = 0.0;
+    float amplitude = 1.0, frequency = 1.0;
+    for (uint i = 0u; i < octaves; ++i) {
+        sum += noise_value(p * frequency) * amplitude;
+        amplitude *= gain;
+        frequency *= lacunarity;
+    }
+    return sum;
+}
+
+float turbulence_value(vec3 p, uint octaves, float lacunarity, float gain) {
+    float sum = 0.0;
+    float amplitude = 1.0, frequency = 1.0;
+    for (uint i = 0u; i < octaves; ++i) {
+        sum += abs(noise_value(p * frequency)) * amplitude;
+        amplitude *= gain;
+        frequency *= lacunarity;
+    }
+    return sum;
+}
+
 // fBm: sum of gain^i * noise(lacunarity^i * p), value in w, gradient in xyz.
 vec4 fbm_with_gradient(vec3 p, uint octaves, float lacunarity, float gain) {
     vec4 sum = vec4(0.0);

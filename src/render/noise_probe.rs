@@ -19,8 +19,9 @@ struct NoiseProbePush {
     gain: f32,
 }
 
-/// Per point: (noise, fBm, turbulence), each with value in `w` and gradient in `xyz`.
-pub type NoiseSample = [Vec4; 3];
+/// Per point: (noise, fBm, turbulence), each with value in `w` and gradient in `xyz`; then the value-only
+/// functions' results (`noise_value`, `fbm_value`, `turbulence_value`) in `xyz`.
+pub type NoiseSample = [Vec4; 4];
 
 pub struct NoiseProbe {
     pipeline: Pipeline,
@@ -68,6 +69,6 @@ impl NoiseProbe {
             Ok(())
         })?;
         let flat: Vec<Vec4> = output.read()?;
-        Ok(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+        Ok(flat.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect())
     }
 }
