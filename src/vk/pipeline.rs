@@ -86,8 +86,8 @@ struct KeptHandles {
 
 /// The compute pipelines a device keeps until it is destroyed. Building one is the costly part of a pass on
 /// lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about 0.8 s, 2 s under
-/// the validation layer, which checks the SPIR-V again), and every render builds its passes anew; kept, a program
-/// that renders many frames on one device (an animation, the benchmark, the test suite) builds each variant once.
+/// the validation layer; docs/performance.md), and every render builds its passes anew; kept, a program that
+/// renders many frames on one device (an animation, the benchmark, the test suite) builds each variant once.
 #[derive(Default)]
 pub struct KeptComputePipelines(HashMap<ComputeKey, KeptHandles>);
 
