@@ -34,6 +34,23 @@ vec2 noise_fade(float t) {
     return vec2(t * t * t * (t * (t * 6.0 - 15.0) + 10.0), 30.0 * t * t * (t * (t - 2.0) + 1.0));
 }
 
+// The trilinear blend of the corner values n0..n7 (corner i has offset bits x = i&1, y = i&2, z = i&4) as
+// polynomial coefficients, so the gradient is exact; noise_with_gradient and noise_value share them, and so
+// give the same value bits.
+struct NoiseBlend {
+    float k0, k1, k2, k3, k4, k5, k6, k7;
+};
+
+NoiseBlend noise_blend(float n0, float n1, float n2, float n3, float n4, float n5, float n6, float n7) {
+    return NoiseBlend(n0, n1 - n0, n2 - n0, n4 - n0, n0 - n1 - n2 + n3, n0 - n2 - n4 + n6, n0 - n1 - n4 + n5,
+                      -n0 + n1 + n2 - n3 + n4 - n5 - n6 + n7);
+}
+
+// The blend's value at the faded cell coordinates (u, v, w).
+float noise_blend_value(NoiseBlend b, float u, float v, float w) {
+    return b.k0 + b.k1 * u + b.k2 * v + b.k3 * w + b.k4 * u * v + b.k5 * v * w + b.k6 * w * u + b.k7 * u * v * w;
+}
+
 // Noise value in w, gradient in xyz. Zero at every integer lattice point.
 vec4 noise_with_gradient(vec3 p) {
     vec3 cell = floor(p);
@@ -52,16 +69,8 @@ vec4 noise_with_gradient(vec3 p) {
     vec3 g7 = noise_gradient_at(noise_lattice_hash(c + ivec3(1, 1, 1))), d7 = f - vec3(1, 1, 1);
     float n0 = dot(g0, d0), n1 = dot(g1, d1), n2 = dot(g2, d2), n3 = dot(g3, d3);
     float n4 = dot(g4, d4), n5 = dot(g5, d5), n6 = dot(g6, d6), n7 = dot(g7, d7);
-    // Trilinear blend as polynomial coefficients, so the gradient is exact.
-    float k0 = n0;
-    float k1 = n1 - n0;
-    float k2 = n2 - n0;
-    float k3 = n4 - n0;
-    float k4 = n0 - n1 - n2 + n3;
-    float k5 = n0 - n2 - n4 + n6;
-    float k6 = n0 - n1 - n4 + n5;
-    float k7 = -n0 + n1 + n2 - n3 + n4 - n5 - n6 + n7;
-    float value = k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+    NoiseBlend b = noise_blend(n0, n1, n2, n3, n4, n5, n6, n7);
+    float value = noise_blend_value(b, u, v, w);
     vec3 blended = g0
         + (g1 - g0) * u
         + (g2 - g0) * v
@@ -71,9 +80,9 @@ vec4 noise_with_gradient(vec3 p) {
         + (g0 - g1 - g4 + g5) * (w * u)
         + (-g0 + g1 + g2 - g3 + g4 - g5 - g6 + g7) * (u * v * w);
     vec3 weights = vec3(
-        du * (k1 + k4 * v + k6 * w + k7 * v * w),
-        dv * (k2 + k4 * u + k5 * w + k7 * u * w),
-        dw * (k3 + k5 * v + k6 * u + k7 * u * v));
+        du * (b.k1 + b.k4 * v + b.k6 * w + b.k7 * v * w),
+        dv * (b.k2 + b.k4 * u + b.k5 * w + b.k7 * u * w),
+        dw * (b.k3 + b.k5 * v + b.k6 * u + b.k7 * u * v));
     return vec4(blended + weights, value);
 }
 
@@ -92,15 +101,7 @@ float noise_value(vec3 p) {
     float n5 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 0, 1))), f - vec3(1, 0, 1));
     float n6 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(0, 1, 1))), f - vec3(0, 1, 1));
     float n7 = dot(noise_gradient_at(noise_lattice_hash(c + ivec3(1, 1, 1))), f - vec3(1, 1, 1));
-    float k0 = n0;
-    float k1 = n1 - n0;
-    float k2 = n2 - n0;
-    float k3 = n4 - n0;
-    float k4 = n0 - n1 - n2 + n3;
-    float k5 = n0 - n2 - n4 + n6;
-    float k6 = n0 - n1 - n4 + n5;
-    float k7 = -n0 + n1 + n2 - n3 + n4 - n5 - n6 + n7;
-    return k0 + k1 * u + k2 * v + k3 * w + k4 * u * v + k5 * v * w + k6 * w * u + k7 * u * v * w;
+    return noise_blend_value(noise_blend(n0, n1, n2, n3, n4, n5, n6, n7), u, v, w);
 }
 
 // fbm_with_gradient's and turbulence_with_gradient's values alone, by the same operations.
