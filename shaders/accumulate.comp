@@ -592,25 +592,17 @@ void camera_ray(GpuCamera c, ivec2 p, vec2 jitter, vec2 lens_uv, out vec3 origin
     t_range = vec2(c.range.x / depth_per_t, min(c.range.y / depth_per_t, 1e30));
 }
 
-void main() {
-    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
-    bool in_image = gl_GlobalInvocationID.x < pc.width && gl_GlobalInvocationID.y < pc.height;
-    uint lane = gl_LocalInvocationIndex;
-    uint shadow_rays = 0u;
-    uint secondary_rays = 0u;
-    if (lane == 0u) {
-        group_shadow_rays = 0u;
-        group_secondary_rays = 0u;
-        group_chain_count = 0u;
-    }
-    memoryBarrierShared();
-    barrier();
+// One 8×8 tile of pixels, shaded by the workgroup (each lane its pixel): the visible surfaces' own light, then
+// their chains, packed. Called in uniform control flow: it holds the barriers around the packing.
+void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secondary_rays) {
+    ivec2 p = ivec2(pixel);
+    bool in_image = pixel.x < pc.width && pixel.y < pc.height;
 
     // The visible surface's own light; its chain ray, if any, joins the workgroup's packed list.
     vec4 value = vec4(pc.background.rgb, 0.0);
     bool chain = false;
     ChainRay r;
-    r.pixel = gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x;
+    r.pixel = pixel.y * pc.width + pixel.x;
     r.lane = lane;
     r.cone = pixel_cone();
     if (in_image) {
@@ -659,12 +651,49 @@ void main() {
         vec4 sum = pc.sample_index == 0u ? vec4(0.0) : imageLoad(accumulation, p);
         imageStore(accumulation, p, sum + value);
     }
+}
+
+// The tile the workgroup shades next, row by row over the image, from this sample's tile counter.
+shared uint group_tile;
+
+// Each workgroup shades tiles until the sample's counter passes the last one (persistent threads: Aila and Laine,
+// "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009). Tiles cost very different amounts (sky,
+// a diffuse wall, glass), and lavapipe hands each thread one fixed, contiguous run of a dispatch's workgroups
+// (lp_cs_tpool), so with one tile per workgroup the thread with the costlier half of the image ran on alone for
+// much of the pass (docs/performance.md); taken from a shared counter, tiles go to whichever thread is free.
+// Which workgroup shades a tile changes nothing in it: the picture is the same bits.
+void main() {
+    uint lane = gl_LocalInvocationIndex;
+    uint tiles_x = (pc.width + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
+    uint tiles = tiles_x * ((pc.height + gl_WorkGroupSize.y - 1u) / gl_WorkGroupSize.y);
+    uint slot = COUNTERS_PER_SLOT * pc.counter_slot;
+    uint shadow_rays = 0u;
+    uint secondary_rays = 0u;
+    if (lane == 0u) {
+        group_shadow_rays = 0u;
+        group_secondary_rays = 0u;
+    }
+    for (;;) {
+        if (lane == 0u) {
+            group_tile = atomicAdd(counters[slot + COUNTER_NEXT_TILE], 1u);
+            group_chain_count = 0u;
+        }
+        memoryBarrierShared();
+        barrier();
+        uint tile = group_tile;
+        if (tile >= tiles) break;
+        shade_tile(uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy, lane,
+                   shadow_rays, secondary_rays);
+        // Every lane has read the tile and its chains' radiance before lane 0 takes the next.
+        barrier();
+    }
+
     atomicAdd(group_shadow_rays, shadow_rays);
     atomicAdd(group_secondary_rays, secondary_rays);
     memoryBarrierShared();
     barrier();
     if (lane == 0u) {
-        atomicAdd(counters[2u * pc.counter_slot], group_shadow_rays);
-        atomicAdd(counters[2u * pc.counter_slot + 1u], group_secondary_rays);
+        atomicAdd(counters[slot + COUNTER_SHADOW_RAYS], group_shadow_rays);
+        atomicAdd(counters[slot + COUNTER_SECONDARY_RAYS], group_secondary_rays);
     }
 }

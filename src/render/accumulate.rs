@@ -108,18 +108,54 @@ impl AccumulatePass {
         Ok(set)
     }
 
-    /// Records one sample's dispatch; the caller has made the G-buffer readable and the TLAS built.
-    pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush) {
+    /// Records one sample's dispatch; the caller has made the G-buffer readable and the TLAS built, and zeroed
+    /// the sample's counters (its tile queue starts at the first tile). `workgroups` overrides how many
+    /// workgroups share the tiles ([`workgroups_for`]).
+    pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush, workgroups: Option<u32>) {
+        let tiles = push.width.div_ceil(LOCAL_SIZE) * push.height.div_ceil(LOCAL_SIZE);
+        let groups = workgroups.unwrap_or_else(|| workgroups_for(tiles, self.device.report.device_type));
         labelled(&self.device, cmd, "accumulate pass", || {
             self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
-            unsafe {
-                self.device.raw.cmd_dispatch(cmd, push.width.div_ceil(LOCAL_SIZE), push.height.div_ceil(LOCAL_SIZE), 1)
-            };
+            unsafe { self.device.raw.cmd_dispatch(cmd, groups.clamp(1, MAX_WORKGROUPS), 1, 1) };
         });
     }
 }
 
-/// Bytes of ray counters for `slots` samples.
+/// The most workgroups one dispatch of the pass launches: the least `maxComputeWorkGroupCount[0]` a device may
+/// have (Vulkan 1.3, table 53). Each loops over tiles, so fewer than the image has still cover it.
+const MAX_WORKGROUPS: u32 = 65_535;
+
+/// Workgroups a CPU device gets: more than a CPU driver runs threads (llvmpipe caps them at LP_MAX_THREADS), so every thread
+/// has one, and few enough that the rest, which find the queue empty, cost nothing.
+const CPU_WORKGROUPS: u32 = 256;
+
+/// How many workgroups share a sample's `tiles` (8×8 pixels each). The shader takes tiles from a queue, so any
+/// number gives the same picture; what it changes is speed. A GPU gets one per tile (up to [`MAX_WORKGROUPS`]), as
+/// many as it can keep resident. A CPU device runs a few at a time, one per thread, and pays for every workgroup it
+/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only [`CPU_WORKGROUPS`].
+pub fn workgroups_for(tiles: u32, device_type: vk::PhysicalDeviceType) -> u32 {
+    let wanted = if device_type == vk::PhysicalDeviceType::CPU { tiles.min(CPU_WORKGROUPS) } else { tiles };
+    wanted.clamp(1, MAX_WORKGROUPS)
+}
+
+/// Bytes of counters (rays cast, the tile queue) for `slots` samples.
 pub fn counter_bytes(slots: u32) -> u64 {
     u64::from(slots.max(1)) * (COUNTERS_PER_SLOT * 4) as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cpu_device_gets_a_few_workgroups_and_a_gpu_one_per_tile() {
+        let (cpu, gpu) = (vk::PhysicalDeviceType::CPU, vk::PhysicalDeviceType::DISCRETE_GPU);
+        // 960x540: 120 x 68 tiles.
+        assert_eq!(workgroups_for(8160, cpu), CPU_WORKGROUPS);
+        assert_eq!(workgroups_for(8160, gpu), 8160);
+        assert_eq!(workgroups_for(6, cpu), 6);
+        assert_eq!(workgroups_for(0, gpu), 1);
+        // 16384 x 16384: more tiles than one dispatch may launch; the queue covers the rest.
+        assert_eq!(workgroups_for(2048 * 2048, gpu), MAX_WORKGROUPS);
+    }
 }

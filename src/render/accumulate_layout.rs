@@ -131,8 +131,9 @@ pub struct ResolvePush {
     pub pad: [u32; 3],
 }
 
-/// Ray counters per sample slot: (shadow rays, secondary rays).
-pub const COUNTERS_PER_SLOT: usize = 2;
+/// Counters per sample slot: shadow rays, secondary rays, and the next tile a workgroup takes (the accumulation
+/// pass's tile queue; zeroed with the rest before each batch). `COUNTERS_PER_SLOT` in accumulate_layout.glsl.
+pub const COUNTERS_PER_SLOT: usize = 3;
 
 #[cfg(test)]
 mod tests {

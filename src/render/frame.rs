@@ -37,6 +37,9 @@ pub struct FrameOptions {
     /// Record every ray the first sample's accumulation pass casts, into [`RenderedFrame::ray_log`] (for the
     /// benchmark to replay through the bare ray-query probe).
     pub log_rays: bool,
+    /// How many workgroups share the accumulation pass's tiles (None: the device's default,
+    /// [`accumulate::workgroups_for`](super::accumulate::workgroups_for)). The picture does not depend on it.
+    pub accumulate_workgroups: Option<u32>,
 }
 
 /// GPU time per pass summed over the frame, in milliseconds.
@@ -203,7 +206,7 @@ pub fn render_frame(
         Buffer::new(device, name, bytes_per_slot * u64::from(batch), usage, location, 16)
     };
     let mut lights = per_slot("lights", light_bytes, MemoryLocation::CpuToGpu)?;
-    let mut counters = per_slot("ray counters", counter_bytes(1), MemoryLocation::GpuToCpu)?;
+    let mut counters = per_slot("sample counters", counter_bytes(1), MemoryLocation::GpuToCpu)?;
     let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
     let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
@@ -337,7 +340,7 @@ pub fn render_frame(
                 } else {
                     memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 }
-                accumulate.record(cmd, &accumulate_set, push);
+                accumulate.record(cmd, &accumulate_set, push, options.accumulate_workgroups);
                 stamp(3, vk::PipelineStageFlags2::COMPUTE_SHADER);
             }
             memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
