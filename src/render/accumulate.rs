@@ -1,6 +1,8 @@
-//! The accumulation pass (`shaders/accumulate.comp`): one compute invocation per pixel reads the G-buffer (or,
-//! in the reference mode, traces the pixel's own primary ray), casts shadow, gloss and translucency rays with ray queries against the TLAS, and adds the sample's radiance into
-//! the RGBA32F accumulation image.
+//! The accumulation pass (`shaders/accumulate.comp`): per pixel, a compute invocation reads the G-buffer (or,
+//! in the reference mode, traces the pixel's own primary ray), casts shadow, gloss and translucency rays with ray
+//! queries against the TLAS, and adds the sample's radiance into the RGBA32F accumulation image. Workgroups take
+//! the image's 8×8 tiles from a queue (a counter per sample), so threads that finish early take more tiles
+//! ([`workgroups_for`]).
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
 use super::gbuffer_layout::{ATTACHMENTS, IDS};
