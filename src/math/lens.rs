@@ -35,7 +35,7 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     Vec2::new(r * theta.cos(), r * theta.sin())
 }
 
-/// The matrices for lens point `lens_uv` (in [0,1]², mapped to the aperture disk) and sub-pixel `jitter` (in
+/// The matrices for lens point `lens_uv` (in `[0,1]²`, mapped to the aperture disk) and sub-pixel `jitter` (in
 /// pixels, e.g. in [−½, ½]²), for an image of `width` × `height`. Aperture 0 and zero jitter give exactly the
 /// camera's own projection.
 pub fn camera_sample(camera: &Camera, width: u32, height: u32, lens_uv: Vec2, jitter: Vec2) -> CameraSample {

@@ -132,9 +132,9 @@ const MAX_WORKGROUPS: u32 = 65_535;
 const CPU_WORKGROUPS: u32 = 256;
 
 /// How many workgroups share a sample's `tiles` (8×8 pixels each). The shader takes tiles from a queue, so any
-/// number gives the same picture; what it changes is speed. A GPU gets one per tile (up to [`MAX_WORKGROUPS`]), as
+/// number gives the same picture; what it changes is speed. A GPU gets one per tile (up to `MAX_WORKGROUPS`), as
 /// many as it can keep resident. A CPU device runs a few at a time, one per thread, and pays for every workgroup it
-/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only [`CPU_WORKGROUPS`].
+/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only `CPU_WORKGROUPS`.
 pub fn workgroups_for(tiles: u32, device_type: vk::PhysicalDeviceType) -> u32 {
     let wanted = if device_type == vk::PhysicalDeviceType::CPU { tiles.min(CPU_WORKGROUPS) } else { tiles };
     wanted.clamp(1, MAX_WORKGROUPS)
