@@ -123,18 +123,19 @@ impl AccumulatePass {
     }
 }
 
-/// The most workgroups one dispatch of the pass launches: the least `maxComputeWorkGroupCount[0]` a device may
-/// have (Vulkan 1.3, table 53). Each loops over tiles, so fewer than the image has still cover it.
+/// The most workgroups one dispatch of the pass launches: the least `maxComputeWorkGroupCount[0]` the Vulkan
+/// spec lets a device report. Each workgroup loops over tiles, so fewer workgroups than tiles still cover the image.
 const MAX_WORKGROUPS: u32 = 65_535;
 
-/// Workgroups a CPU device gets: more than a CPU driver runs threads (llvmpipe caps them at LP_MAX_THREADS), so every thread
-/// has one, and few enough that the rest, which find the queue empty, cost nothing.
+/// Workgroups a CPU device gets: more than a CPU driver runs threads (llvmpipe caps them at its LP_MAX_THREADS),
+/// so every thread has one, and few enough that the rest, which find the queue empty, cost next to nothing.
 const CPU_WORKGROUPS: u32 = 256;
 
 /// How many workgroups share a sample's `tiles` (8×8 pixels each). The shader takes tiles from a queue, so any
 /// number gives the same picture; what it changes is speed. A GPU gets one per tile (up to `MAX_WORKGROUPS`), as
-/// many as it can keep resident. A CPU device runs a few at a time, one per thread, and pays for every workgroup it
-/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only `CPU_WORKGROUPS`.
+/// many as it can keep resident. A CPU device runs one workgroup per thread at a time and pays for every one it
+/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only
+/// `CPU_WORKGROUPS`.
 pub fn workgroups_for(tiles: u32, device_type: vk::PhysicalDeviceType) -> u32 {
     let wanted = if device_type == vk::PhysicalDeviceType::CPU { tiles.min(CPU_WORKGROUPS) } else { tiles };
     wanted.clamp(1, MAX_WORKGROUPS)
