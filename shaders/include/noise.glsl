@@ -104,27 +104,26 @@ float noise_value(vec3 p) {
     return noise_blend_value(noise_blend(n0, n1, n2, n3, n4, n5, n6, n7), u, v, w);
 }
 
-// fbm_with_gradient's and turbulence_with_gradient's values alone, by the same operations.
-float fbm_value(vec3 p, uint octaves, float lacunarity, float gain) {
+// The sum of gain^i * noise(lacunarity^i * p), each octave's noise taken as |noise| when `absolute`: the values of
+// fbm_with_gradient and turbulence_with_gradient by the same operations.
+float octave_sum_value(vec3 p, uint octaves, float lacunarity, float gain, bool absolute) {
     float sum = 0.0;
     float amplitude = 1.0, frequency = 1.0;
     for (uint i = 0u; i < octaves; ++i) {
-        sum += noise_value(p * frequency) * amplitude;
+        float n = noise_value(p * frequency);
+        sum += (absolute ? abs(n) : n) * amplitude;
         amplitude *= gain;
         frequency *= lacunarity;
     }
     return sum;
 }
 
+float fbm_value(vec3 p, uint octaves, float lacunarity, float gain) {
+    return octave_sum_value(p, octaves, lacunarity, gain, false);
+}
+
 float turbulence_value(vec3 p, uint octaves, float lacunarity, float gain) {
-    float sum = 0.0;
-    float amplitude = 1.0, frequency = 1.0;
-    for (uint i = 0u; i < octaves; ++i) {
-        sum += abs(noise_value(p * frequency)) * amplitude;
-        amplitude *= gain;
-        frequency *= lacunarity;
-    }
-    return sum;
+    return octave_sum_value(p, octaves, lacunarity, gain, true);
 }
 
 // fBm: sum of gain^i * noise(lacunarity^i * p), value in w, gradient in xyz.
