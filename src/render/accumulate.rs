@@ -115,10 +115,13 @@ impl AccumulatePass {
     /// workgroups share the tiles ([`workgroups_for`]).
     pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush, workgroups: Option<u32>) {
         let tiles = push.width.div_ceil(LOCAL_SIZE) * push.height.div_ceil(LOCAL_SIZE);
-        let groups = workgroups.unwrap_or_else(|| workgroups_for(tiles, self.device.report.device_type));
+        let groups = match workgroups {
+            Some(n) => n.clamp(1, MAX_WORKGROUPS),
+            None => workgroups_for(tiles, self.device.report.device_type),
+        };
         labelled(&self.device, cmd, "accumulate pass", || {
             self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
-            unsafe { self.device.raw.cmd_dispatch(cmd, groups.clamp(1, MAX_WORKGROUPS), 1, 1) };
+            unsafe { self.device.raw.cmd_dispatch(cmd, groups, 1, 1) };
         });
     }
 }
