@@ -245,9 +245,16 @@ uint pick_light(float u) {
 // lobe has no MIS), so the lights and emitters such a ray reaches add nothing, or they would count twice.
 const float DIFFUSE_BOUNCE = -1.0;
 
-// The probability that a path goes on by the diffuse lobe (0 without diffuse interreflection).
+// The probability that a path goes on by the diffuse lobe: 0 without diffuse interreflection, where light
+// sampling takes that lobe whole, except when BSDF sampling alone estimates direct light.
 float diffuse_probability(Shading m) {
-    return pc.indirect != 0u ? diffuse_choice(m) : 0.0;
+    return pc.indirect != 0u || pc.direct_light == DIRECT_BSDF_SAMPLING ? diffuse_choice(m) : 0.0;
+}
+
+// Whether a path may go on from vertex `depth` (--bounces): the MIS weights of that vertex's light sample
+// count on it.
+bool room_to_bounce(uint depth) {
+    return depth + 1u < pc.max_depth;
 }
 
 // The probability that it goes on by the specular lobe: what scales the gloss rays' density for MIS.
@@ -255,14 +262,18 @@ float specular_share(Shading m) {
     return 1.0 - diffuse_probability(m);
 }
 
-// One light sample: the light picked by power, a point on it, its shadow ray. The diffuse lobe takes it whole;
-// the specular lobe shares it with the gloss rays by the power heuristic.
-vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_rays) {
+// One light sample: the light picked by power, a point on it, its shadow ray. With MIS the diffuse lobe takes it
+// whole and the specular lobe shares it with the gloss rays by the power heuristic, when a gloss ray follows
+// from this vertex (`bsdf_follows`); where the path ends here no BSDF sample covers the specular lobe, so the
+// light sample takes it whole as well. Light sampling alone takes every lobe whole; BSDF sampling alone leaves
+// the lights to the rays, except delta lights, which no ray can hit.
+vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, bool bsdf_follows, inout uint shadow_rays) {
     if (pc.light_count == 0u) return vec3(0.0);
     GpuLight l = lights[pick_light(sample1(pixel, dim))];
     float p = l.cone.w;
     if (!(p > 0.0)) return vec3(0.0);
     LightSample ls = sample_light(l, s.position, sample2(pixel, dim + 1u));
+    if (pc.direct_light == DIRECT_BSDF_SAMPLING && !ls.delta) return vec3(0.0);
     if (l.position_kind.w == LIGHT_TRIANGLE && l.uv2_material.z >= 0.0) {
         // The emitter's material where the sample landed, as a ray hit there would see it (hit_surface): its
         // emissive texture scales the radiance, and where alpha-masking cuts the surface out nothing emits.
@@ -281,24 +292,45 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, inout uint shadow_ray
     vec3 diffuse;
     vec3 specular;
     brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);
-    if (!ls.delta) specular *= power_heuristic(p * ls.pdf, specular_share(s.m) * specular_pdf(s.m, s.normal, v, ls.dir));
+    if (!ls.delta && pc.direct_light == DIRECT_MIS && bsdf_follows) {
+        specular *= power_heuristic(p * ls.pdf, specular_share(s.m) * specular_pdf(s.m, s.normal, v, ls.dir));
+    }
     vec3 f = diffuse + specular;
     if (f == vec3(0.0)) return vec3(0.0);
     shadow_rays++;
     vec3 o = offset_origin(s.position, s.geometric, ls.dir);
-    // Stop short of the light: emissive triangles are geometry and must not shadow themselves.
-    float t_max = min(ls.dist * (1.0 - 1e-4) - 1e-4 * (1.0 + ls.dist), 1e30);
-    if (occluded(o, ls.dir, t_max)) return vec3(0.0);
+    vec3 shadow_dir = ls.dir;
+    float t_max = 1e30;
+    if (ls.dist < 1e30) {
+        // Aim from the offset origin at the sampled point itself and stop just short of it: emissive triangles
+        // are geometry and must not shadow themselves. Measured from the surface point instead, the offset
+        // (towards the light's plane, for a floor under a ceiling light) brought the light's plane nearer than
+        // the margin where the light is seen at a grazing angle, and shadowed the light by itself.
+        vec3 to_light = s.position + ls.dir * ls.dist - o;
+        float dist = length(to_light);
+        shadow_dir = to_light / dist;
+        t_max = dist * (1.0 - 1e-4) - 1e-4 * (1.0 + dist);
+    }
+    if (occluded(o, shadow_dir, t_max)) return vec3(0.0);
     return f * ls.value / p;
 }
 
-// Turns the normals to the side the ray arrives from; arriving from behind means travelling inside.
-void face_viewer(inout Surface s, vec3 v) {
+// Turns the normals to the side the ray arrives from; arriving from behind means travelling inside. Then the
+// one rule of emission, for every way a surface is seen (the G-buffer's visible surface, primary rays, gloss,
+// translucency and diffuse rays): a surface emits towards a side only where light sampling could choose it
+// (render/lights.rs), so a one-sided emitter is dark from behind, and light sampling and BSDF sampling agree
+// on where light comes from. `emitter_density` is π · luminance · sides of the emissive factor on an emitting
+// side (the density behind the lights' selection by power), else 0.
+void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
     s.inside = dot(s.geometric, v) < 0.0;
     if (s.inside) {
         s.normal = -s.normal;
         s.geometric = -s.geometric;
     }
+    bool emits = m.double_sided != 0 || !s.inside;
+    if (!emits) s.emission = vec3(0.0);
+    float factor = luminance(m.emissive.rgb);
+    s.emitter_density = emits && factor > 0.0 ? PI * factor * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
 }
 
 Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
@@ -310,7 +342,6 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     vec4 geometric = texelFetch(gbuffer[2], p, 0);
     s.geometric = normalize(geometric.xyz);
     s.emission = texelFetch(gbuffer[5], p, 0).rgb;
-    s.emitter_density = 0.0;
     s.m.albedo = texelFetch(gbuffer[3], p, 0).rgb;
     s.m.metallic = mat.x;
     s.m.roughness = mat.y;
@@ -318,7 +349,7 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     s.m.ior = 1.0 + 3.0 * mat.w;
     s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
     s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[6], p, 0).rgb;
-    face_viewer(s, v);
+    face_viewer(s, v, materials[material]);
     return s;
 }
 
@@ -419,11 +450,7 @@ Surface hit_surface(rayQueryEXT q, vec3 v, float cone_width, const bool visible)
                                          texture_uv(m.specular_color_uv_rows, uv, uv1),
                                          texture_lod(m.specular_color_uv_rows, lod)).rgb;
     }
-    face_viewer(s, v);
-    // Matches render/lights.rs: emissive surfaces are lights chosen by their factor's power (a texture scales
-    // what a sample brings, not how often it is chosen), one-sided ones only from the front.
-    bool sampled = luminance(m.emissive.rgb) > 0.0 && (m.double_sided != 0 || !s.inside);
-    s.emitter_density = sampled ? PI * luminance(m.emissive.rgb) * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
+    face_viewer(s, v, m);
     return s;
 }
 
@@ -456,6 +483,10 @@ struct ChainRay {
     vec3 throughput;
     uint lane;  // the invocation whose pixel it belongs to
     vec2 cone;  // the ray cone: width at the origin, spread angle (pixel_cone)
+    // 1: the ray only gathers the light it reaches (lights and emitters, not the background) and the path
+    // ends at its hit: BSDF sampling's estimate of the direct light at the vertex it left (a path's last
+    // vertex, or the diffuse lobe without diffuse interreflection).
+    uint gather_only;
 };
 
 // The workgroup's chain rays, packed: lavapipe runs 8 lanes in lockstep, so chains scattered over the
@@ -477,7 +508,11 @@ vec3 sample_cosine(vec3 n, vec2 u) {
 // (cosine-weighted) with probability diffuse_probability; otherwise GGX around the mirror or refracted direction.
 // Then Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
 // Survival is 4x the weight: weak reflections still end most paths, at a quarter of the variance.
+// Past the last vertex --bounces allows, BSDF sampling alone still casts one ray that only gathers light.
 bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
+    bool bsdf_only = pc.direct_light == DIRECT_BSDF_SAMPLING;
+    if (!room_to_bounce(depth) && !bsdf_only) return false;
+    r.gather_only = room_to_bounce(depth) ? 0u : 1u;
     uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
     vec3 weight;
     float u_lobe = sample1(r.pixel, dim + 3u);
@@ -492,12 +527,15 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
         // f·cos / (p_diffuse · cos/π).
         weight = diffuse * (PI / (nl * p_diffuse));
         r.pdf = DIFFUSE_BOUNCE;
+        if (pc.indirect == 0u) r.gather_only = 1u;
     } else {
         // The rest of u_lobe chooses between reflection and refraction.
         u_lobe = (u_lobe - p_diffuse) / (1.0 - p_diffuse);
         if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + 4u), u_lobe, r.dir, weight, r.pdf)) {
             return false;
         }
+        // A reflection below the face, as light sampling sees it (direct_light), reflects nothing.
+        if (r.pdf > 0.0 && dot(s.geometric, r.dir) <= 0.0) return false;
         weight /= 1.0 - p_diffuse;
         r.pdf *= 1.0 - p_diffuse;
     }
@@ -514,25 +552,28 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
 
 // The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
 vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
-    vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, shadow_rays);
+    vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
     r.throughput = vec3(1.0);
-    chain = pc.max_depth > 1u && next_chain_ray(s, v, 0u, r);
+    chain = next_chain_ray(s, v, 0u, r);
     return radiance;
 }
 
 // The weight of light a chain ray reaches, which light sampling chooses with solid-angle density
-// `light_density` (0: never): a reflection (pdf > 0) shares it by MIS, a refraction has it alone (light sampling
-// never covers it), a diffuse bounce leaves it to light sampling, which took it whole.
+// `light_density` (0: never, as for a refraction, which light sampling never covers: the ray has it alone).
+// With MIS a reflection (pdf > 0) shares it by the power heuristic and a diffuse bounce leaves it to light
+// sampling, which took that lobe whole; light sampling alone leaves rays nothing it covers, BSDF sampling alone
+// gives them everything.
 float reached_light_weight(float pdf, float light_density) {
-    if (pdf == DIFFUSE_BOUNCE) return light_density > 0.0 ? 0.0 : 1.0;
-    return pdf > 0.0 ? power_heuristic(pdf, light_density) : 1.0;
+    if (!(light_density > 0.0) || pdf == 0.0 || pc.direct_light == DIRECT_BSDF_SAMPLING) return 1.0;
+    if (pc.direct_light == DIRECT_LIGHT_SAMPLING || pdf == DIFFUSE_BOUNCE) return 0.0;
+    return power_heuristic(pdf, light_density);
 }
 
 // The chain from vertex 1 on: each ray finds a light (MIS against light sampling; nothing for a diffuse
 // bounce), the background, or a surface whose emission and one light sample it adds before going on.
 vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
     vec3 radiance = vec3(0.0);
-    for (uint depth = 1u; depth < pc.max_depth; depth++) {
+    for (uint depth = 1u; depth <= pc.max_depth; depth++) {
         secondary_rays++;
         log_ray(0u, r.origin, 0.0, r.dir, 1e30);
         rayQueryEXT q;
@@ -547,7 +588,7 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
             break;
         }
         if (!hit) {
-            radiance += r.throughput * pc.background.rgb;
+            if (r.gather_only == 0u) radiance += r.throughput * pc.background.rgb;
             break;
         }
         vec3 v = -r.dir;
@@ -559,8 +600,10 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
             density = s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power);
         }
         radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
-        radiance += r.throughput * direct_light(s, v, r.pixel, DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth, shadow_rays);
-        if (depth + 1u >= pc.max_depth || !next_chain_ray(s, v, depth, r)) break;
+        if (r.gather_only != 0u) break;
+        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+        radiance += r.throughput * direct_light(s, v, r.pixel, dim, room_to_bounce(depth), shadow_rays);
+        if (!next_chain_ray(s, v, depth, r)) break;
     }
     return radiance;
 }
@@ -604,6 +647,7 @@ void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secon
     ChainRay r;
     r.pixel = pixel.y * pc.width + pixel.x;
     r.lane = lane;
+    r.gather_only = 0u;
     r.cone = pixel_cone();
     if (in_image) {
         if (PRIMARY_RAYS != 0u) {
@@ -648,6 +692,8 @@ void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secon
         if (chain) value.rgb += group_chain_radiance[lane];
         // A sample that went wrong must not poison the pixel's whole estimate.
         if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);
+        // For the tests' error estimates: the sample's squared luminance instead of its coverage.
+        if (pc.alpha_moment != 0u) value.w = luminance(value.rgb) * luminance(value.rgb);
         vec4 sum = pc.sample_index == 0u ? vec4(0.0) : imageLoad(accumulation, p);
         imageStore(accumulation, p, sum + value);
     }

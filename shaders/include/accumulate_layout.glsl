@@ -67,5 +67,17 @@ layout(push_constant, std430) uniform AccumulatePush {
     float total_light_power;  // the sum the selection probabilities were divided by
     uint64_t ray_log;         // where to record every ray cast (RayLog, the benchmark's replay probe), or 0
     uint indirect;            // 1: paths also go on by the diffuse lobe (diffuse interreflection, Kajiya 1986)
+    uint direct_light;        // how direct light is estimated: DIRECT_MIS, DIRECT_LIGHT_SAMPLING, DIRECT_BSDF_SAMPLING
+    uint alpha_moment;        // 1: alpha accumulates each sample's squared luminance instead of coverage
+    uint pad_end0;  // to the Rust struct's 16-byte multiple
+    uint pad_end1;
+    uint pad_end2;
 } pc;
+
+// The direct-light estimators (render::frame::DirectLight): light sampling and BSDF sampling combined by
+// multiple importance sampling (Veach and Guibas 1995), or either alone. All three estimate the same integral,
+// so the tests hold each to the others.
+const uint DIRECT_MIS = 0u;
+const uint DIRECT_LIGHT_SAMPLING = 1u;
+const uint DIRECT_BSDF_SAMPLING = 2u;
 #endif

@@ -86,11 +86,14 @@ void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 spec
     specular = vec3(0.0);
     float nl = dot(n, l);
     if (nl <= 0.0) return;
-    float nv = max(dot(n, v), 1e-4);
+    float nv = dot(n, v);
     vec3 h = normalize(l + v);
     float base_share;
     vec3 f = fresnel(m, max(dot(v, h), 0.0), base_share);
     diffuse = base_share * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
+    // Seen from below the shading normal (a bumped or interpolated normal turned away from the viewer) the
+    // specular lobe reflects nothing, as sample_specular finds: light sampling and gloss rays agree.
+    if (nv <= 0.0) return;
     float a = ggx_alpha(m.roughness);
     specular = f * ggx_d(max(dot(n, h), 0.0), a) * smith_visibility(nl, nv, a) * nl;
 }
@@ -149,8 +152,8 @@ vec3 sample_ggx_vndf(vec3 ve, float a, vec2 u) {
 }
 
 // The specular continuation of a path at a surface: a direction around the ideal reflection (gloss) or
-// refraction (translucency), chosen by their Fresnel weights, and the throughput weight F·G1(l) / p of VNDF
-// sampling. `inside`: v is inside the material (refraction leaves it). False when the path ends here.
+// refraction (translucency), chosen by their Fresnel weights, and the throughput weight of VNDF sampling
+// (F·G2/G1(v) for reflection, the transmitted share·G1(l) for refraction). `inside`: v is inside the material (refraction leaves it). False when the path ends here.
 // `pdf` is the reflection's solid-angle density (for MIS against light sampling); 0 for refraction, which light
 // sampling never covers.
 bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lobe, out vec3 wi, out vec3 weight,
@@ -178,7 +181,9 @@ bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lob
         wi = reflect(-v, h);
         float nl = dot(n, wi);
         if (nl <= 0.0) return false;
-        weight = reflect_weight / p_reflect * smith_g1(nl, a);
+        // f·cos / pdf = F · G2(v, l) / G1(v), with brdf_cos's height-correlated G2 = 4 n·l n·v V: the BRDF
+        // the rays sample is the one light sampling evaluates (the separable G1(l) would be darker at grazing).
+        weight = reflect_weight / p_reflect * (4.0 * nl * ve.z * smith_visibility(nl, ve.z, a) / smith_g1(ve.z, a));
         pdf = smith_g1(ve.z, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * ve.z) * p_reflect;
         return true;
     }

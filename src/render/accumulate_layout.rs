@@ -115,8 +115,18 @@ pub struct AccumulatePush {
     pub ray_log: u64,
     /// 1: paths also go on by the diffuse lobe (diffuse interreflection), 0: Cook's effects alone.
     pub indirect: u32,
-    pub pad: u32,
+    /// How direct light is estimated: one of the `DIRECT_*` constants (accumulate_layout.glsl).
+    pub direct_light: u32,
+    /// 1: the accumulation's alpha sums each sample's squared luminance instead of its coverage.
+    pub alpha_moment: u32,
+    pub pad: [u32; 3],
 }
+
+/// `pc.direct_light`'s values (accumulate_layout.glsl): multiple importance sampling of lights and BSDF, or
+/// either alone.
+pub const DIRECT_MIS: u32 = 0;
+pub const DIRECT_LIGHT_SAMPLING: u32 = 1;
+pub const DIRECT_BSDF_SAMPLING: u32 = 2;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
@@ -153,11 +163,13 @@ mod tests {
         assert_eq!(offset_of!(GpuPrimitiveRecord, material), 56);
         assert_eq!(size_of::<GpuCamera>(), 96);
         assert_eq!(offset_of!(GpuCamera, range), 80);
-        assert_eq!(size_of::<AccumulatePush>(), 112);
+        assert_eq!(size_of::<AccumulatePush>(), 128);
         assert_eq!(offset_of!(AccumulatePush, ray_log), 96);
         assert_eq!(offset_of!(AccumulatePush, width), 48);
         assert_eq!(offset_of!(AccumulatePush, max_depth), 88);
         assert_eq!(offset_of!(AccumulatePush, indirect), 104);
+        assert_eq!(offset_of!(AccumulatePush, direct_light), 108);
+        assert_eq!(offset_of!(AccumulatePush, alpha_moment), 112);
         assert_eq!(size_of::<ResolvePush>(), 32);
     }
 }

@@ -29,6 +29,35 @@ const DIM_PIXEL: u32 = 0;
 const DIM_TIME: u32 = 1;
 const DIM_LENS: u32 = 2;
 
+/// How the accumulation pass estimates the light that reaches a path vertex straight from the lights and
+/// emitters. All three converge to the same picture (the tests hold them to it); they differ in noise.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum DirectLight {
+    /// Light sampling and BSDF sampling combined by multiple importance sampling (Veach and Guibas 1995, the
+    /// power heuristic): the renderer's estimator.
+    #[default]
+    Mis,
+    /// Light sampling alone: every lobe takes the light sample whole; rays add only light that light sampling
+    /// cannot choose (seen through refraction).
+    LightSampling,
+    /// BSDF sampling alone: rays find the lights and emitters (one more ray past a path's last vertex, and a
+    /// diffuse one even without diffuse interreflection); light sampling is left only for point and directional
+    /// lights, which no ray can hit.
+    BsdfSampling,
+}
+
+impl DirectLight {
+    /// The value the shader reads (`pc.direct_light`).
+    fn shader_value(self) -> u32 {
+        use super::accumulate_layout::{DIRECT_BSDF_SAMPLING, DIRECT_LIGHT_SAMPLING, DIRECT_MIS};
+        match self {
+            DirectLight::Mis => DIRECT_MIS,
+            DirectLight::LightSampling => DIRECT_LIGHT_SAMPLING,
+            DirectLight::BsdfSampling => DIRECT_BSDF_SAMPLING,
+        }
+    }
+}
+
 /// Options that are not picture settings.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrameOptions {
@@ -40,6 +69,11 @@ pub struct FrameOptions {
     /// How many workgroups share the accumulation pass's tiles (None: the device's default,
     /// [`accumulate::workgroups_for`](super::accumulate::workgroups_for)). The picture does not depend on it.
     pub accumulate_workgroups: Option<u32>,
+    /// The direct-light estimator (MIS unless a test asks for one strategy alone).
+    pub direct_light: DirectLight,
+    /// Make [`RenderedFrame::linear`]'s alpha the mean of each sample's squared luminance instead of coverage,
+    /// so that a test can estimate each pixel's variance: Var = (E[L²] − E[L]²), over N − 1 for the mean's.
+    pub luminance_moments: bool,
 }
 
 /// GPU time per pass summed over the frame, in milliseconds.
@@ -226,7 +260,8 @@ pub fn render_frame(
     // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
     // Path vertices: the visible surface and its bounces.
     let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
-    let rays_per_pixel = 2 * u64::from(max_depth);
+    // BSDF sampling alone casts one more ray past the last vertex.
+    let rays_per_pixel = 2 * u64::from(max_depth) + 1;
     let ray_log = if options.log_rays {
         Some(super::ray_log::RayLog::new(device, u64::from(width) * u64::from(height) * rays_per_pixel)?)
     } else {
@@ -294,7 +329,9 @@ pub fn render_frame(
                 total_light_power: set.total_power,
                 ray_log: ray_log.as_ref().filter(|_| index == 0).map_or(0, |log| log.address()),
                 indirect: u32::from(settings.indirect),
-                pad: 0,
+                direct_light: options.direct_light.shader_value(),
+                alpha_moment: u32::from(options.luminance_moments),
+                pad: [0; 3],
             };
             samples.push((camera_sample, push));
         }
