@@ -98,6 +98,10 @@ fn shader_kind(path: &Path) -> Option<shaderc::ShaderKind> {
         "vert" => Some(shaderc::ShaderKind::Vertex),
         "frag" => Some(shaderc::ShaderKind::Fragment),
         "comp" => Some(shaderc::ShaderKind::Compute),
+        "rgen" => Some(shaderc::ShaderKind::RayGeneration),
+        "rchit" => Some(shaderc::ShaderKind::ClosestHit),
+        "rahit" => Some(shaderc::ShaderKind::AnyHit),
+        "rmiss" => Some(shaderc::ShaderKind::Miss),
         _ => None,
     }
 }

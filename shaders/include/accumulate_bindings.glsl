@@ -1,0 +1,32 @@
+// The accumulation pass's specialization constants, descriptor bindings and buffer-reference types, shared by
+// its compute shader (ray queries) and its ray-tracing pipeline's shaders; the Rust side is
+// src/render/accumulate.rs. Include after accumulate_layout.glsl and gbuffer_layout.glsl.
+#ifndef ACCUMULATE_BINDINGS_GLSL
+#define ACCUMULATE_BINDINGS_GLSL
+// 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
+// pipeline holds only its own path).
+layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
+// 1: some geometry is alpha-tested (glTF MASK or BLEND) and built non-opaque, so ray queries stop at its
+// candidate triangles to test them; 0: every ray is forced opaque and the pipeline holds no alpha test.
+layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
+// The flags every ray starts with, besides its own: with no alpha-tested geometry every ray is opaque and the
+// alpha test is never reached.
+const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
+// position, shading normal, geometric normal, albedo, material, emission, specular colour (gbuffer_layout.rs).
+layout(set = 0, binding = 1) uniform sampler2D gbuffer[7];
+layout(set = 0, binding = 2) uniform usampler2D gbuffer_ids;
+layout(set = 0, binding = 3, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
+layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLight lights[]; };
+layout(set = 0, binding = 6, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
+layout(set = 0, binding = 7) uniform sampler2D textures[];
+layout(set = 0, binding = 8, std430) buffer Counters { uint counters[]; };
+layout(set = 0, binding = 9, std430) readonly buffer Cameras { GpuCamera cameras[]; };
+
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec3Array { vec3 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec4Array { vec4 v[]; };
+layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer UintArray { uint v[]; };
+#endif
