@@ -18,7 +18,7 @@ fn outcome(o: &Output) -> String {
 }
 
 fn samples() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-samples");
     assert!(dir.is_dir(), "the shared glTF samples are missing at {}", dir.display());
     dir
 }

@@ -1,4 +1,4 @@
-//! The shared glTF sample models (`../shared/gltf-samples`, see its README for the counts and sources) load with
+//! The shared glTF sample models (`tests/data/gltf-samples`, a copy of the team's shared samples; see its README for the counts and sources) load with
 //! the expected counts, their transforms and animations come out as the file says, and textures keep their
 //! orientation.
 use glam::{Mat4, Quat, Vec3};
@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 use strata::scene::Scene;
 
 fn samples_dir() -> PathBuf {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-samples");
     // Absent samples are a failure, never a skip: these checks would pass by not running.
     assert!(
         dir.is_dir(),
-        "the shared glTF samples are missing at {}: check out the team's shared folder beside this repository",
+        "the shared glTF samples are missing at {}: they ship in the repository under tests/data/gltf-samples",
         dir.display()
     );
     dir

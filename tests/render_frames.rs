@@ -86,7 +86,7 @@ fn every_scene_and_sample_model_renders_finite_pixels() {
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
-    let samples = repo("../shared/gltf-samples");
+    let samples = repo("tests/data/gltf-samples");
     assert!(samples.is_dir(), "the glTF samples are expected at {}", samples.display());
     paths.extend(
         std::fs::read_dir(&samples)
