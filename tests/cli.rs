@@ -37,7 +37,8 @@ fn info_lists_a_ray_query_device_and_the_layer() {
     assert!(out.status.success(), "strata info failed: {}\n{text}", outcome(&out));
     assert!(text.contains("Validation layer: VK_LAYER_KHRONOS_validation"), "{text}");
     assert!(text.contains("ray query: yes"), "{text}");
-    assert!(text.contains("strata:    usable"), "{text}");
+    assert!(text.contains("pipeline:  yes"), "{text}");
+    assert!(text.contains("strata:    usable; --trace auto takes query"), "{text}");
 }
 
 #[test]
@@ -364,6 +365,56 @@ fn primary_rays_are_traced_per_pixel_when_asked_and_a_wrong_mode_is_named() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("pathtraced") && stderr(&out).contains("raster, rays"), "{}", stderr(&out));
     assert!(!png.exists(), "a refused render writes nothing");
+}
+
+/// `--trace query` and `--trace pipeline` write the same PNG bytes of the showcase on lavapipe (one traversal
+/// code under both), the summary names the way, `[render] trace` is read, and a wrong word is named.
+#[test]
+fn both_ways_to_trace_write_the_same_showcase_and_a_wrong_way_is_named() {
+    let dir = temp_dir("trace");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let showcase = repo.join("scenes/showcase.toml");
+    let render = |scene: &Path, png: &Path, extra: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap()];
+        args.extend(["--size", "96x54", "--spp", "4", "--json", "--quiet", "--validate"]);
+        args.extend(extra);
+        strata(&args)
+    };
+    let mut bytes = Vec::new();
+    for way in ["query", "pipeline"] {
+        let png = dir.join(format!("{way}.png"));
+        let out = render(&showcase, &png, &["--trace", way]);
+        assert!(out.status.success(), "--trace {way}: {}", outcome(&out));
+        let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON object");
+        assert_eq!(summary["trace"], way);
+        bytes.push(std::fs::read(&png).unwrap());
+    }
+    assert!(bytes[0] == bytes[1], "--trace query and --trace pipeline wrote different PNGs");
+
+    // The scene file's [render] table chooses too; the command line wins over it.
+    let text = std::fs::read_to_string(&showcase).unwrap().replace("[render]", "[render]\ntrace = \"pipeline\"");
+    for file in ["showcase.gltf", "showcase.bin"] {
+        std::fs::copy(repo.join("scenes").join(file), dir.join(file)).unwrap();
+    }
+    let scene = dir.join("trace-in-file.toml");
+    std::fs::write(&scene, &text).unwrap();
+    let from_file = render(&scene, &dir.join("file.png"), &[]);
+    let overridden = render(&scene, &dir.join("cli.png"), &["--trace", "query"]);
+    std::fs::write(&scene, text.replace("trace = \"pipeline\"", "trace = \"rtx\"")).unwrap();
+    let wrong_in_file = render(&scene, &dir.join("wrong.png"), &[]);
+    let trace_of = |o: &Output| {
+        assert!(o.status.success(), "{}", outcome(o));
+        serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["trace"].clone()
+    };
+    assert_eq!(trace_of(&from_file), "pipeline");
+    assert_eq!(trace_of(&overridden), "query");
+    let err = stderr(&wrong_in_file);
+    assert!(!wrong_in_file.status.success() && err.contains("trace-") && err.contains("\"rtx\""), "{err}");
+    assert!(err.contains("auto, query, pipeline"), "{err}");
+
+    let out = render(&showcase, &dir.join("bad.png"), &["--trace", "rtx"]);
+    assert!(!out.status.success() && stderr(&out).contains("auto, query, pipeline"), "{}", outcome(&out));
+    assert!(!dir.join("bad.png").exists() && !dir.join("wrong.png").exists(), "a refused render writes nothing");
 }
 
 /// Starts a long showcase render into a fresh directory, lets it load, upload and start sampling, then sends it

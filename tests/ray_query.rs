@@ -9,7 +9,7 @@ use strata::vk::Buffer;
 
 #[test]
 fn rays_hit_the_instances_they_aim_at() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::ray_queries();
     let device = gpu.device();
     // A unit square in the z = 0 plane, [−0.5, 0.5]², as two triangles.
     let positions =

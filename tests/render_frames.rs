@@ -376,7 +376,7 @@ fn assert_renders_alike_in_both_modes(gpu: &GpuTest, textured: &Scene, factors: 
     }
 }
 
-/// A second frame on the same device builds no compute pipeline of its own (the device keeps them) and is the first
+/// A second frame on the same device builds no pipeline of its own (the device keeps them) and is the first
 /// frame bit for bit.
 #[test]
 fn a_second_frame_on_one_device_reuses_the_compute_pipelines_and_matches_the_first() {
@@ -384,12 +384,14 @@ fn a_second_frame_on_one_device_reuses_the_compute_pipelines_and_matches_the_fir
     let scene = load(&repo("scenes/cornell.toml"));
     let s = settings(48, 32, 2, SamplerKind::Jittered);
     let first = render(gpu.device(), &scene, &s);
-    let kept = gpu.device().kept_compute_pipelines().len();
+    let kept = gpu.device().kept_pipelines().len();
     let second = render(gpu.device(), &scene, &s);
-    assert_eq!(gpu.device().kept_compute_pipelines().len(), kept, "the second frame built a compute pipeline");
+    assert_eq!(gpu.device().kept_pipelines().len(), kept, "the second frame built a pipeline");
     assert!(first.linear == second.linear && first.display == second.display, "the frames differ");
     let traced = render(gpu.device(), &scene, &RenderSettings { primary: Primary::Rays, ..s });
-    assert_eq!(gpu.device().kept_compute_pipelines().len(), kept + 1, "the reference mode is its own pipeline");
+    // One more per way to trace (`render` renders with each the device has).
+    let paths = strata::render::accumulate::TracePath::available(gpu.device()).len();
+    assert_eq!(gpu.device().kept_pipelines().len(), kept + paths, "the reference mode is its own pipeline");
     assert!(traced.linear != first.linear, "the reference mode rendered the raster frame");
     gpu.finish().unwrap();
 }
@@ -403,23 +405,38 @@ fn the_ray_log_holds_every_ray_the_pass_casts_and_only_observes() {
     let gpu = GpuTest::new();
     let scene = load(&repo("scenes/showcase.toml"));
     let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
-    for primary in [Primary::Raster, Primary::Rays] {
-        let s = RenderSettings { primary, ..settings(64, 36, 1, SamplerKind::Jittered) };
+    let paths = strata::render::accumulate::TracePath::available(gpu.device());
+    for (primary, path) in [Primary::Raster, Primary::Rays].into_iter().flat_map(|p| paths.iter().map(move |t| (p, *t)))
+    {
+        let s = RenderSettings { primary, trace: path.as_trace(), ..settings(64, 36, 1, SamplerKind::Jittered) };
         let logged = FrameOptions { log_rays: true, ..Default::default() };
         let frame = render_frame(gpu.device(), &scene, &on_gpu, &s, &logged, &mut |_, _| true).unwrap();
         let plain = render(gpu.device(), &scene, &s);
-        assert!(frame.linear == plain.linear, "{primary:?}: logging the rays changed the picture");
+        assert!(frame.linear == plain.linear, "{primary:?}, {path:?}: logging the rays changed the picture");
         let st = &frame.stats;
         let shadow = frame.ray_log.iter().filter(|r| r.flags == ProbeRay::FIRST_HIT).count() as u64;
         let closest = frame.ray_log.iter().filter(|r| r.flags == 0).count() as u64;
-        eprintln!("{primary:?}: {} rays logged, {shadow} shadow, {closest} closest hit; {st:?}", frame.ray_log.len());
-        assert_eq!(shadow + closest, frame.ray_log.len() as u64, "{primary:?}: unexpected ray flags");
-        assert_eq!(shadow, st.shadow_rays, "{primary:?}: shadow rays logged vs counted");
-        assert_eq!(closest, st.secondary_rays + st.camera_rays, "{primary:?}: closest-hit rays logged vs counted");
-        assert!(st.shadow_rays > 1000 && st.secondary_rays > 100, "{primary:?}: too few rays to mean anything");
+        eprintln!(
+            "{primary:?}, {path:?}: {} rays logged, {shadow} shadow, {closest} closest hit; {st:?}",
+            frame.ray_log.len()
+        );
+        assert_eq!(shadow + closest, frame.ray_log.len() as u64, "{primary:?}, {path:?}: unexpected ray flags");
+        assert_eq!(shadow, st.shadow_rays, "{primary:?}, {path:?}: shadow rays logged vs counted");
+        assert_eq!(
+            closest,
+            st.secondary_rays + st.camera_rays,
+            "{primary:?}, {path:?}: closest-hit rays logged vs counted"
+        );
+        assert!(
+            st.shadow_rays > 1000 && st.secondary_rays > 100,
+            "{primary:?}, {path:?}: too few rays to mean anything"
+        );
         for r in &frame.ray_log {
-            assert!(r.origin.is_finite() && (r.direction.length() - 1.0).abs() < 1e-3, "{primary:?}: ray {r:?}");
-            assert!(r.t_min >= 0.0 && r.t_max > r.t_min, "{primary:?}: empty interval {r:?}");
+            assert!(
+                r.origin.is_finite() && (r.direction.length() - 1.0).abs() < 1e-3,
+                "{primary:?}, {path:?}: ray {r:?}"
+            );
+            assert!(r.t_min >= 0.0 && r.t_max > r.t_min, "{primary:?}, {path:?}: empty interval {r:?}");
         }
     }
     drop(on_gpu);

@@ -39,7 +39,7 @@ fn a_leaked_object_is_reported_at_teardown() {
 
 #[test]
 fn creating_and_destroying_every_kind_of_object_is_clean() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::ray_queries();
     let device = gpu.device();
     {
         let storage = Buffer::new(
@@ -97,7 +97,7 @@ fn creating_and_destroying_every_kind_of_object_is_clean() {
 
 #[test]
 fn an_empty_tlas_is_a_valid_miss_everywhere() {
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::ray_queries();
     let device = gpu.device();
     let tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();
     let probe = RayProbe::new(device).unwrap();
@@ -111,9 +111,9 @@ fn an_empty_tlas_is_a_valid_miss_everywhere() {
 #[test]
 fn a_device_builds_each_compute_pipeline_once_and_destroys_it_with_itself() {
     use strata::vk::pipeline::{Binding, Pipeline};
-    let gpu = common::GpuTest::new();
+    let gpu = common::GpuTest::ray_queries();
     let device = gpu.device();
-    let kept = || device.kept_compute_pipelines().len();
+    let kept = || device.kept_pipelines().len();
     let bindings = [
         Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
         Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
@@ -205,4 +205,35 @@ fn a_crash_names_the_gpu_test_that_held_the_device() {
     assert_eq!(out.status.signal(), Some(libc::SIGSEGV), "the signal must still end the child: {stderr}");
     let named = format!("strata: crashed with SIGSEGV while running the GPU test `{NAME}`");
     assert!(stderr.contains(&named), "stderr must say {named:?}:\n{stderr}");
+}
+
+/// The ray-tracing pipeline's shader binding table is laid out from the device's limits: as laid out it draws no
+/// message; moved half a `shaderGroupBaseAlignment` off (the handles still where the regions say, so the driver
+/// reads the right ones), the layer reports the misaligned region (VUID-vkCmdTraceRaysKHR-pRayGenShaderBindingTable-03682
+/// and its siblings for the other regions).
+#[test]
+fn a_misaligned_shader_binding_table_is_caught_by_the_layer_and_the_aligned_one_is_clean() {
+    use strata::render::frame::{render_frame, FrameOptions};
+    use strata::scene::settings::{RenderSettings, Trace};
+    let scene =
+        strata::load_scene(std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell.toml"))).unwrap();
+    let settings = RenderSettings { width: 16, height: 16, spp: 1, trace: Trace::Pipeline, ..Default::default() };
+    let render_with = |misaligned: bool| {
+        let gpu = common::GpuTest::new();
+        let device = gpu.device().clone();
+        let limits = device.ray_tracing.as_ref().expect("lavapipe has ray-tracing pipelines").limits;
+        assert!(limits.base_alignment > limits.handle_alignment, "{limits:?}: no misalignment to make");
+        let options = FrameOptions {
+            misalign_shader_binding_table: if misaligned { u64::from(limits.base_alignment / 2) } else { 0 },
+            ..Default::default()
+        };
+        let on_gpu = strata::render::SceneOnGpu::upload(&device, &scene).unwrap();
+        let frame = render_frame(&device, &scene, &on_gpu, &settings, &options, &mut |_, _| true).unwrap();
+        assert_eq!(frame.stats.trace, strata::render::accumulate::TracePath::Pipeline);
+        drop((on_gpu, device));
+        gpu.finish()
+    };
+    render_with(false).expect("the shader binding table as laid out draws no message");
+    let report = render_with(true).expect_err("a misaligned shader binding table must fail the harness");
+    assert!(report.contains("VUID-vkCmdTraceRaysKHR-pRayGenShaderBindingTable-03682"), "report was:\n{report}");
 }

@@ -95,6 +95,12 @@ pub struct RenderArgs {
     /// tested against; the shutter time is still shared per sample) [default: the scene file's, else raster].
     #[arg(long, value_name = "MODE", value_parser = parse_primary)]
     pub primary: Option<strata::scene::settings::Primary>,
+    /// How rays are traced: query (VK_KHR_ray_query in a compute shader), pipeline (a ray-tracing pipeline,
+    /// VK_KHR_ray_tracing_pipeline: NVIDIA H100/H200 have only this), or auto (ray queries where the device has
+    /// them, else a pipeline). Both run the same shading code; `strata info` shows which a device has
+    /// [default: the scene file's, else auto].
+    #[arg(long, value_name = "HOW", value_parser = parse_trace)]
+    pub trace: Option<strata::scene::settings::Trace>,
     /// Also follow paths by the diffuse lobe: light bouncing between diffuse surfaces (Kajiya 1986), up to
     /// --bounces times with Russian roulette, on top of Cook's effects. Slower and noisier; off by default, or as
     /// the scene file's `indirect` says.
@@ -142,6 +148,10 @@ pub struct InfoArgs {
 
 pub fn parse_sampler(text: &str) -> Result<strata::scene::settings::SamplerKind, String> {
     strata::scene::settings::SamplerKind::parse(text).map_err(|e| e.to_string())
+}
+
+pub fn parse_trace(text: &str) -> Result<strata::scene::settings::Trace, String> {
+    strata::scene::settings::Trace::parse(text).map_err(|e| e.to_string())
 }
 
 pub fn parse_primary(text: &str) -> Result<strata::scene::settings::Primary, String> {

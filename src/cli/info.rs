@@ -29,7 +29,9 @@ pub fn info(args: InfoArgs) -> Result<()> {
         print_stdout(&text);
         bail!("no Vulkan devices found; run scripts/setup.sh to install Mesa's lavapipe");
     }
-    let chosen = strata::vk::device::select_device(&reports, None, strata::vk::DeviceNeeds::RayQueries).ok();
+    let chosen = strata::vk::device::select_device(&reports, None, strata::vk::DeviceNeeds::RayTracing).ok();
+    let yes_no =
+        |has: bool, lacks: &[String]| if has { "yes".to_string() } else { format!("no (lacks {})", lacks.join(", ")) };
     out!("Devices:");
     for r in &reports {
         let marker = if Some(r.index) == chosen { " (default)" } else { "" };
@@ -37,16 +39,21 @@ pub fn info(args: InfoArgs) -> Result<()> {
         out!("      type:      {}", r.type_name());
         out!("      driver:    {} {}", r.driver_name, r.driver_info);
         out!("      Vulkan:    {}", r.api_version_string());
-        out!("      ray query: {}", if r.ray_query { "yes" } else { "no" });
+        out!("      ray query: {} (--trace query)", yes_no(r.ray_query, &r.missing_for_query));
+        out!("      pipeline:  {} (--trace pipeline)", yes_no(r.ray_tracing_pipeline, &r.missing_for_pipeline));
         if r.qualifies() {
-            out!("      strata:    usable");
+            let auto = if r.ray_query { "query" } else { "pipeline" };
+            out!("      strata:    usable; --trace auto takes {auto}");
         } else {
-            out!("      strata:    not usable, lacks {}", r.missing.join(", "));
+            out!("      strata:    not usable, {}", r.status());
         }
     }
     print_stdout(&text);
     if chosen.is_none() {
-        bail!("no device can run strata; run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query");
+        bail!(
+            "no device can run strata (it needs ray queries or ray-tracing pipelines); run scripts/setup.sh to \
+             install Mesa's lavapipe, which has both"
+        );
     }
     Ok(())
 }

@@ -41,6 +41,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         primary: args.primary,
         indirect: if args.indirect { Some(true) } else { args.no_indirect.then_some(false) },
         bounces: args.bounces,
+        trace: args.trace,
         output: args.output.clone(),
     };
     if let Some(ev) = args.exposure {
@@ -84,7 +85,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         validation: args.gpu.validate,
         echo_messages: args.gpu.validate,
         device: args.gpu.device.clone(),
-        ..Default::default()
+        needs: strata::render::accumulate::TracePath::device_needs(settings.trace),
     })?;
     let log = gpu.validation_log();
     // Geometry and textures go up once for every pass of this render.
@@ -135,6 +136,10 @@ pub fn render(args: RenderArgs) -> Result<()> {
         spp: if args.preview { 1 } else { settings.spp },
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
         primary: if args.preview { "raster" } else { settings.primary.name() },
+        trace: match &picture {
+            Picture::Rendered(r) => r.stats.trace.name(),
+            Picture::Preview(_) => "no",
+        },
         indirect: settings.indirect && !args.preview,
         bounces: if args.preview { 0 } else { settings.bounces },
         seed: settings.seed,

@@ -8,6 +8,8 @@ pub struct Summary {
     pub sampler: &'static str,
     /// Where visible surfaces came from: "raster" or "rays".
     pub primary: &'static str,
+    /// How rays were traced: "query", "pipeline", or "none" (the preview).
+    pub trace: &'static str,
     /// Diffuse interreflection was on.
     pub indirect: bool,
     pub bounces: u32,
@@ -30,7 +32,7 @@ impl Summary {
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
         let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
         format!(
-            "strata: wrote {} ({}x{}, {} spp {}, {} primary{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} tracing{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
              {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
             self.written.join(" and "),
             self.width,
@@ -38,6 +40,7 @@ impl Summary {
             self.spp,
             self.sampler,
             self.primary,
+            self.trace,
             if self.indirect { ", indirect diffuse" } else { "" },
             self.triangles,
             self.device,
@@ -59,6 +62,7 @@ impl Summary {
             "spp": self.spp,
             "sampler": self.sampler,
             "primary": self.primary,
+            "trace": self.trace,
             "indirect": self.indirect,
             "bounces": self.bounces,
             "seed": self.seed,

@@ -1,27 +1,97 @@
-//! The accumulation pass (`shaders/accumulate.comp`): per pixel, a compute invocation reads the G-buffer (or,
-//! in the reference mode, traces the pixel's own primary ray), casts shadow, gloss and translucency rays with ray
-//! queries against the TLAS, and adds the sample's radiance into the RGBA32F accumulation image. Workgroups take
-//! the image's 8×8 tiles from a queue (a counter per sample), so threads that finish early take more tiles
-//! ([`workgroups_for`]).
+//! The accumulation pass: per pixel, it reads the G-buffer (or, in the reference mode, traces the pixel's own
+//! primary ray), casts shadow, gloss and translucency rays against the TLAS, and adds the sample's radiance into
+//! the RGBA32F accumulation image. One shading body (`shaders/include/path_tracer.glsl`) traces in one of two
+//! ways ([`TracePath`]): with ray queries in a compute shader (`accumulate.comp`), whose workgroups take the
+//! image's 8×8 tiles from a queue (a counter per sample) so that threads that finish early take more
+//! ([`workgroups_for`]); or through a ray-tracing pipeline (`accumulate.rgen`, one invocation per pixel, with
+//! hit shaders that only record the hit and run the alpha test), for devices without ray queries.
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
 use super::gbuffer_layout::{ATTACHMENTS, IDS};
 use super::textures::GpuTextures;
+use crate::scene::settings::Trace;
 use crate::shaders;
 use crate::vk::accel::AccelerationStructure;
 use crate::vk::commands::labelled;
 use crate::vk::descriptors::DescriptorSet;
-use crate::vk::pipeline::{Binding, Pipeline};
+use crate::vk::pipeline::{Binding, Pipeline, RayTracingDesc};
 use crate::vk::sampler::{Sampler, SamplerDesc};
+use crate::vk::shader_binding_table::ShaderBindingTable;
 use crate::vk::{Buffer, Device, Image};
-use anyhow::Result;
+use anyhow::{bail, Result};
 use ash::vk;
 use std::sync::Arc;
 
 const LOCAL_SIZE: u32 = 8;
 
+/// How the pass traces its rays on a device (`Trace` resolved).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TracePath {
+    /// Ray queries in a compute shader (`VK_KHR_ray_query`).
+    Query,
+    /// A ray-tracing pipeline (`VK_KHR_ray_tracing_pipeline`).
+    Pipeline,
+}
+
+impl TracePath {
+    /// What the summary line, `--json` and the benchmark call it (`--trace`'s words).
+    pub fn name(self) -> &'static str {
+        match self {
+            TracePath::Query => "query",
+            TracePath::Pipeline => "pipeline",
+        }
+    }
+
+    /// The way `trace` asks for on `device`: auto takes ray queries where the device has them, else a pipeline.
+    /// Fails, saying what the device lacks, where it has not the way asked for.
+    pub fn choose(trace: Trace, device: &Device) -> Result<Self> {
+        let report = &device.report;
+        match trace {
+            Trace::Query => device.require_ray_queries("--trace query").map(|_| TracePath::Query),
+            Trace::Pipeline => device.require_ray_tracing_pipelines("--trace pipeline").map(|_| TracePath::Pipeline),
+            Trace::Auto if report.ray_query => Ok(TracePath::Query),
+            Trace::Auto if device.ray_tracing.is_some() => Ok(TracePath::Pipeline),
+            Trace::Auto => bail!("{} can trace rays neither way: {}", report.name, report.status()),
+        }
+    }
+
+    /// What a device must have for `trace`.
+    pub fn device_needs(trace: Trace) -> crate::vk::DeviceNeeds {
+        match trace {
+            Trace::Auto => crate::vk::DeviceNeeds::RayTracing,
+            Trace::Query => crate::vk::DeviceNeeds::RayQueries,
+            Trace::Pipeline => crate::vk::DeviceNeeds::RayTracingPipeline,
+        }
+    }
+
+    /// The ways `device` can trace: what a test renders with to hold both to the same picture.
+    pub fn available(device: &Device) -> Vec<TracePath> {
+        let mut paths = Vec::new();
+        if device.report.ray_query {
+            paths.push(TracePath::Query);
+        }
+        if device.ray_tracing.is_some() {
+            paths.push(TracePath::Pipeline);
+        }
+        paths
+    }
+
+    pub fn as_trace(self) -> Trace {
+        match self {
+            TracePath::Query => Trace::Query,
+            TracePath::Pipeline => Trace::Pipeline,
+        }
+    }
+}
+
+/// The pass's pipeline: a compute pipeline, or a ray-tracing pipeline and its shader binding table.
+enum Tracer {
+    Query(Pipeline),
+    Pipeline { pipeline: Pipeline, table: Box<ShaderBindingTable> },
+}
+
 pub struct AccumulatePass {
-    pipeline: Pipeline,
+    tracer: Tracer,
     /// Nearest, clamped: the G-buffer is read texel by texel.
     gbuffer_sampler: Sampler,
     device: Arc<Device>,
@@ -44,9 +114,17 @@ pub struct AccumulateInputs<'a> {
 impl AccumulatePass {
     /// `primary_rays`: trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
     /// `alpha_tested`: some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is
-    /// forced opaque and the pipeline carries no alpha test.
-    pub fn new(device: &Arc<Device>, texture_count: u32, primary_rays: bool, alpha_tested: bool) -> Result<Self> {
-        device.require_ray_queries("the accumulation pass")?;
+    /// forced opaque and the pipeline carries no alpha test (and no any-hit shader).
+    /// `table_shift`: bytes to move the shader binding table off its alignment (0 but in the test that breaks it
+    /// on purpose).
+    pub fn new(
+        device: &Arc<Device>,
+        path: TracePath,
+        texture_count: u32,
+        primary_rays: bool,
+        alpha_tested: bool,
+        table_shift: u64,
+    ) -> Result<Self> {
         let bindings = [
             Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
             // Every G-buffer attachment but the ids, which binding 2 reads as unsigned integers.
@@ -64,14 +142,36 @@ impl AccumulatePass {
             Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
             Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
         ];
-        let pipeline = Pipeline::compute_specialized(
-            device,
-            if primary_rays { "accumulate pipeline (primary rays)" } else { "accumulate pipeline" },
-            ("accumulate.comp", shaders::ACCUMULATE_COMP),
-            &bindings,
-            std::mem::size_of::<AccumulatePush>() as u32,
-            &[u32::from(primary_rays), u32::from(alpha_tested)],
-        )?;
+        let constants = [u32::from(primary_rays), u32::from(alpha_tested)];
+        let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
+        let mode = if primary_rays { " (primary rays)" } else { "" };
+        let tracer = match path {
+            TracePath::Query => Tracer::Query(Pipeline::compute_specialized(
+                device,
+                &format!("accumulate pipeline{mode}"),
+                ("accumulate.comp", shaders::ACCUMULATE_COMP),
+                &bindings,
+                push_constant_size,
+                &constants,
+            )?),
+            TracePath::Pipeline => {
+                let pipeline = Pipeline::ray_tracing(
+                    device,
+                    &RayTracingDesc {
+                        name: &format!("accumulate ray-tracing pipeline{mode}"),
+                        raygen: ("accumulate.rgen", shaders::ACCUMULATE_RGEN),
+                        miss: ("accumulate.rmiss", shaders::ACCUMULATE_RMISS),
+                        closest_hit: ("accumulate.rchit", shaders::ACCUMULATE_RCHIT),
+                        any_hit: alpha_tested.then_some(("accumulate.rahit", shaders::ACCUMULATE_RAHIT)),
+                        bindings: &bindings,
+                        push_constant_size,
+                        constants: &constants,
+                    },
+                )?;
+                let table = Box::new(ShaderBindingTable::new(device, &pipeline, table_shift)?);
+                Tracer::Pipeline { pipeline, table }
+            }
+        };
         let gbuffer_sampler = Sampler::new(
             device,
             "gbuffer texel sampler",
@@ -83,12 +183,33 @@ impl AccumulatePass {
                 mipmaps: None,
             },
         )?;
-        Ok(Self { pipeline, gbuffer_sampler, device: device.clone() })
+        Ok(Self { tracer, gbuffer_sampler, device: device.clone() })
+    }
+
+    pub fn path(&self) -> TracePath {
+        match self.tracer {
+            Tracer::Query(_) => TracePath::Query,
+            Tracer::Pipeline { .. } => TracePath::Pipeline,
+        }
+    }
+
+    fn pipeline(&self) -> &Pipeline {
+        match &self.tracer {
+            Tracer::Query(pipeline) | Tracer::Pipeline { pipeline, .. } => pipeline,
+        }
+    }
+
+    /// The stage the pass's shaders run in (for timestamps after it).
+    pub fn stage(&self) -> vk::PipelineStageFlags2 {
+        match self.tracer {
+            Tracer::Query(_) => vk::PipelineStageFlags2::COMPUTE_SHADER,
+            Tracer::Pipeline { .. } => vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR,
+        }
     }
 
     /// The descriptor set for one frame: every binding stays the same across its samples.
     pub fn descriptor_set(&self, inputs: &AccumulateInputs<'_>) -> Result<DescriptorSet> {
-        let set = self.pipeline.new_descriptor_set("accumulate set")?;
+        let set = self.pipeline().new_descriptor_set("accumulate set")?;
         let gbuffer: Vec<(vk::ImageView, vk::Sampler)> = inputs
             .gbuffer
             .color
@@ -110,19 +231,42 @@ impl AccumulatePass {
         Ok(set)
     }
 
-    /// Records one sample's dispatch; the caller has made the G-buffer readable and the TLAS built, and zeroed
-    /// the sample's counters (its tile queue starts at the first tile). `workgroups` overrides how many
-    /// workgroups share the tiles ([`workgroups_for`]).
+    /// Records one sample's dispatch (or trace); the caller has made the G-buffer readable and the TLAS built,
+    /// and zeroed the sample's counters (its tile queue starts at the first tile). `workgroups` overrides how many
+    /// workgroups share the tiles ([`workgroups_for`]; the pipeline path launches one invocation per pixel).
     pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush, workgroups: Option<u32>) {
-        let tiles = push.width.div_ceil(LOCAL_SIZE) * push.height.div_ceil(LOCAL_SIZE);
-        let groups = match workgroups {
-            Some(n) => n.clamp(1, MAX_WORKGROUPS),
-            None => workgroups_for(tiles, self.device.report.device_type),
-        };
-        labelled(&self.device, cmd, "accumulate pass", || {
-            self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
-            unsafe { self.device.raw.cmd_dispatch(cmd, groups, 1, 1) };
-        });
+        let device = &self.device;
+        match &self.tracer {
+            Tracer::Query(pipeline) => {
+                let tiles = push.width.div_ceil(LOCAL_SIZE) * push.height.div_ceil(LOCAL_SIZE);
+                let groups = match workgroups {
+                    Some(n) => n.clamp(1, MAX_WORKGROUPS),
+                    None => workgroups_for(tiles, device.report.device_type),
+                };
+                labelled(device, cmd, "accumulate pass (ray queries)", || {
+                    pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
+                    unsafe { device.raw.cmd_dispatch(cmd, groups, 1, 1) };
+                });
+            }
+            Tracer::Pipeline { pipeline, table } => {
+                let Some(rt) = device.ray_tracing.as_ref() else { return };
+                labelled(device, cmd, "accumulate pass (ray-tracing pipeline)", || {
+                    pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
+                    unsafe {
+                        rt.loader.cmd_trace_rays(
+                            cmd,
+                            &table.raygen,
+                            &table.miss,
+                            &table.hit,
+                            &table.callable,
+                            push.width,
+                            push.height,
+                            1,
+                        )
+                    };
+                });
+            }
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! lens point from the sampler), the instances and lights at that time, a TLAS rebuild, the G-buffer pass and
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
-use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass};
+use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass, TracePath};
 use super::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::lights::LightSet;
@@ -74,6 +74,10 @@ pub struct FrameOptions {
     /// Make [`RenderedFrame::linear`]'s alpha the mean of each sample's squared luminance instead of coverage,
     /// so that a test can estimate each pixel's variance: Var = (E[L²] − E[L]²), over N − 1 for the mean's.
     pub luminance_moments: bool,
+    /// Bytes to move the ray-tracing pipeline's shader binding table off its alignment: only for the test that
+    /// shows the validation layer catches a misaligned table. 0 in every render.
+    #[doc(hidden)]
+    pub misalign_shader_binding_table: u64,
 }
 
 /// GPU time per pass summed over the frame, in milliseconds.
@@ -93,6 +97,8 @@ impl PassTimes {
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameStats {
+    /// How the accumulation pass traced its rays.
+    pub trace: TracePath,
     pub samples: u32,
     pub width: u32,
     pub height: u32,
@@ -245,7 +251,14 @@ pub fn render_frame(
     let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
-    let accumulate = AccumulatePass::new(device, texture_count, traced, ray_scene.alpha_tested)?;
+    let accumulate = AccumulatePass::new(
+        device,
+        TracePath::choose(settings.trace, device)?,
+        texture_count,
+        traced,
+        ray_scene.alpha_tested,
+        options.misalign_shader_binding_table,
+    )?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
         gbuffer: &gbuffer,
@@ -378,7 +391,7 @@ pub fn render_frame(
                     memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 }
                 accumulate.record(cmd, &accumulate_set, push, options.accumulate_workgroups);
-                stamp(3, vk::PipelineStageFlags2::COMPUTE_SHADER);
+                stamp(3, accumulate.stage());
             }
             memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
             if last {
@@ -427,6 +440,7 @@ pub fn render_frame(
     let linear = Frame::new(width, height, linear.to_rgba_f32()?)?;
     let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
     let stats = FrameStats {
+        trace: accumulate.path(),
         samples: spp,
         width,
         height,

@@ -5,7 +5,7 @@ use super::camera::{look_at, Lens};
 use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
-use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, Trace, MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -101,6 +101,7 @@ struct RenderSection {
     primary: Option<S<String>>,
     indirect: Option<bool>,
     bounces: Option<S<u32>>,
+    trace: Option<S<String>>,
     output: Option<String>,
 }
 
@@ -597,6 +598,8 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         r.tone_map.as_ref().map(|s| ToneMap::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
     let primary =
         r.primary.as_ref().map(|s| Primary::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
+    let trace =
+        r.trace.as_ref().map(|s| Trace::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
     let background = match &r.background {
         Some(b) => {
             let rgb = source.finite(b, "background")?;
@@ -619,6 +622,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         primary,
         indirect: r.indirect,
         bounces: source.count_in_range(&r.bounces, "bounces", 0, MAX_BOUNCES)?,
+        trace,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
 }

@@ -82,6 +82,36 @@ impl Primary {
     }
 }
 
+/// How the accumulation pass traces its rays. Both ways run the same shading code (shaders/include/path_tracer.glsl)
+/// and, on lavapipe, give the same bits; what differs is which devices have them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Trace {
+    /// Ray queries where the device has them, else a ray-tracing pipeline.
+    #[default]
+    Auto,
+    /// Ray queries (`VK_KHR_ray_query`) in a compute shader.
+    Query,
+    /// A ray-tracing pipeline (`VK_KHR_ray_tracing_pipeline`): what NVIDIA's data-centre GPUs (H100, H200) have.
+    Pipeline,
+}
+
+impl Trace {
+    pub const NAMES: [&'static str; 3] = ["auto", "query", "pipeline"];
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name {
+            "auto" => Self::Auto,
+            "query" => Self::Query,
+            "pipeline" => Self::Pipeline,
+            other => bail!("unknown way to trace \"{other}\" (one of: {})", Self::NAMES.join(", ")),
+        })
+    }
+}
+
 /// Largest image side strata accepts before asking the device (which may allow less).
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest samples-per-pixel count accepted: more is a typo, not a render.
@@ -107,6 +137,8 @@ pub struct RenderSettings {
     /// Most bounces after the visible surface: gloss and translucency rays (and diffuse ones with `indirect`).
     /// 0 is direct light alone; the default 3 sees through a glass sphere (in, out, and what lies behind).
     pub bounces: u32,
+    /// How rays are traced (ray queries or a ray-tracing pipeline); the picture does not depend on it.
+    pub trace: Trace,
     /// Default output path (the command line's `-o` wins).
     pub output: Option<PathBuf>,
 }
@@ -125,6 +157,7 @@ impl Default for RenderSettings {
             primary: Primary::Raster,
             indirect: false,
             bounces: 3,
+            trace: Trace::Auto,
             output: None,
         }
     }
@@ -144,6 +177,7 @@ pub struct SettingsOverrides {
     pub primary: Option<Primary>,
     pub indirect: Option<bool>,
     pub bounces: Option<u32>,
+    pub trace: Option<Trace>,
     pub output: Option<PathBuf>,
 }
 
@@ -162,6 +196,7 @@ impl RenderSettings {
         self.primary = o.primary.unwrap_or(self.primary);
         self.indirect = o.indirect.unwrap_or(self.indirect);
         self.bounces = o.bounces.unwrap_or(self.bounces);
+        self.trace = o.trace.unwrap_or(self.trace);
         self.output = o.output.or(self.output);
         self
     }

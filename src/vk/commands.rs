@@ -175,6 +175,17 @@ impl Access {
     };
 }
 
+/// A barrier's stage mask as recorded: where pipelines are enabled, the compute stage stands for every stage
+/// that may trace rays (`Device::tracing_stages`), so that one `Access` covers the accumulation pass whether it
+/// runs as a compute shader or as a ray-tracing pipeline.
+fn recorded(device: &Device, stage: vk::PipelineStageFlags2) -> vk::PipelineStageFlags2 {
+    if stage.contains(vk::PipelineStageFlags2::COMPUTE_SHADER) {
+        stage | device.tracing_stages()
+    } else {
+        stage
+    }
+}
+
 /// An image layout transition with the two access scopes.
 pub fn image_barrier(
     device: &Device,
@@ -201,9 +212,9 @@ pub fn image_levels_barrier(
         .subresource_range(range)
         .old_layout(from.0)
         .new_layout(to.0)
-        .src_stage_mask(from.1.stage)
+        .src_stage_mask(recorded(device, from.1.stage))
         .src_access_mask(from.1.access)
-        .dst_stage_mask(to.1.stage)
+        .dst_stage_mask(recorded(device, to.1.stage))
         .dst_access_mask(to.1.access)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)];
@@ -214,9 +225,9 @@ pub fn image_levels_barrier(
 /// A global memory barrier between two access scopes.
 pub fn memory_barrier(device: &Device, cmd: vk::CommandBuffer, from: Access, to: Access) {
     let barrier = [vk::MemoryBarrier2::default()
-        .src_stage_mask(from.stage)
+        .src_stage_mask(recorded(device, from.stage))
         .src_access_mask(from.access)
-        .dst_stage_mask(to.stage)
+        .dst_stage_mask(recorded(device, to.stage))
         .dst_access_mask(to.access)];
     let dependency = vk::DependencyInfo::default().memory_barriers(&barrier);
     unsafe { device.raw.cmd_pipeline_barrier2(cmd, &dependency) };
@@ -228,9 +239,9 @@ pub fn buffer_barrier(device: &Device, cmd: vk::CommandBuffer, buffer: &Buffer, 
         .buffer(buffer.raw)
         .offset(0)
         .size(vk::WHOLE_SIZE)
-        .src_stage_mask(from.stage)
+        .src_stage_mask(recorded(device, from.stage))
         .src_access_mask(from.access)
-        .dst_stage_mask(to.stage)
+        .dst_stage_mask(recorded(device, to.stage))
         .dst_access_mask(to.access)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)];

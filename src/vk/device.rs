@@ -1,7 +1,8 @@
-//! Physical device selection (ray queries required for rendering; discrete, then integrated, then CPU) and the
-//! logical device that owns the queue, the allocator and the extension loaders.
+//! Physical device selection (rendering needs ray queries or a ray-tracing pipeline; discrete, then integrated,
+//! then CPU) and the logical device that owns the queue, the allocator and the extension loaders.
 use super::instance::{version_string, Instance, API_VERSION};
-use super::pipeline::KeptComputePipelines;
+use super::pipeline::KeptPipelines;
+use super::shader_binding_table::ShaderGroupLimits;
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
@@ -10,26 +11,37 @@ use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Device extensions strata cannot run without. Deferred host operations is required by
-/// `VK_KHR_acceleration_structure` (Vulkan spec, extension dependencies).
-pub const REQUIRED_EXTENSIONS: [&CStr; 3] =
-    [ash::khr::acceleration_structure::NAME, ash::khr::ray_query::NAME, ash::khr::deferred_host_operations::NAME];
+/// `VK_KHR_acceleration_structure` (Vulkan spec, extension dependencies). Rays are traced with one of
+/// `VK_KHR_ray_query` and `VK_KHR_ray_tracing_pipeline` (`DeviceNeeds`), each enabled where the device has it.
+pub const REQUIRED_EXTENSIONS: [&CStr; 2] =
+    [ash::khr::acceleration_structure::NAME, ash::khr::deferred_host_operations::NAME];
 
-/// What a device is asked for. Rendering traces rays with ray queries; the raster pass and the compute shaders
-/// that trace none (the noise and sampler probes) do not, so their tests also run on GPUs without
-/// `VK_KHR_ray_query` (an NVIDIA H100 has acceleration structures and ray-tracing pipelines but no ray queries).
+/// What a device is asked for. Rendering traces rays with ray queries or a ray-tracing pipeline, whichever the
+/// device has (an NVIDIA H100 has acceleration structures and ray-tracing pipelines but no ray queries); the ray
+/// probe needs ray queries; the raster pass and the compute shaders that trace no rays (the noise and sampler
+/// probes) need neither.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum DeviceNeeds {
+    /// Ray queries or a ray-tracing pipeline (`--trace auto`).
     #[default]
+    RayTracing,
+    /// Ray queries (`--trace query`, the ray probe).
     RayQueries,
+    /// A ray-tracing pipeline (`--trace pipeline`).
+    RayTracingPipeline,
     RasterOnly,
 }
 
-/// The `DeviceReport::missing` entry of a device that has VK_KHR_ray_query but not its feature.
-const RAY_QUERY_FEATURE: &str = "feature rayQuery";
-
-/// Whether a `DeviceReport::missing` entry is about ray queries alone.
-fn about_ray_queries(missing: &str) -> bool {
-    missing.as_bytes() == ash::khr::ray_query::NAME.to_bytes() || missing == RAY_QUERY_FEATURE
+impl DeviceNeeds {
+    /// What the "no device qualifies" error says strata looked for.
+    fn describe(self) -> &'static str {
+        match self {
+            DeviceNeeds::RayTracing => "Vulkan 1.3 with ray queries or a ray-tracing pipeline",
+            DeviceNeeds::RayQueries => "Vulkan 1.3 with ray queries",
+            DeviceNeeds::RayTracingPipeline => "Vulkan 1.3 with a ray-tracing pipeline",
+            DeviceNeeds::RasterOnly => "Vulkan 1.3 with acceleration structures",
+        }
+    }
 }
 
 /// One physical device as `strata info` and device selection see it.
@@ -42,22 +54,53 @@ pub struct DeviceReport {
     pub api_version: u32,
     pub driver_name: String,
     pub driver_info: String,
+    /// Ray queries (`VK_KHR_ray_query` and its feature): the compute-shader way to trace.
     pub ray_query: bool,
-    /// What the device lacks for strata; empty when it qualifies.
+    /// Ray-tracing pipelines (`VK_KHR_ray_tracing_pipeline` and its feature).
+    pub ray_tracing_pipeline: bool,
+    /// What the device lacks for anything strata does (both ways to trace need it); empty when nothing.
     pub missing: Vec<String>,
+    /// What it lacks for ray queries alone (empty when `ray_query`).
+    pub missing_for_query: Vec<String>,
+    /// What it lacks for ray-tracing pipelines alone (empty when `ray_tracing_pipeline`).
+    pub missing_for_pipeline: Vec<String>,
     pub handle: vk::PhysicalDevice,
 }
 
 impl DeviceReport {
-    /// Whether strata can render on it.
+    /// Whether strata can render on it (one way to trace or the other).
     pub fn qualifies(&self) -> bool {
-        self.qualifies_for(DeviceNeeds::RayQueries)
+        self.qualifies_for(DeviceNeeds::RayTracing)
     }
 
     pub fn qualifies_for(&self, needs: DeviceNeeds) -> bool {
-        match needs {
-            DeviceNeeds::RayQueries => self.missing.is_empty(),
-            DeviceNeeds::RasterOnly => self.missing.iter().all(|m| about_ray_queries(m)),
+        self.missing.is_empty()
+            && match needs {
+                DeviceNeeds::RayTracing => self.ray_query || self.ray_tracing_pipeline,
+                DeviceNeeds::RayQueries => self.ray_query,
+                DeviceNeeds::RayTracingPipeline => self.ray_tracing_pipeline,
+                DeviceNeeds::RasterOnly => true,
+            }
+    }
+
+    /// One line on what the device can do for strata, or lacks for each way to trace.
+    pub fn status(&self) -> String {
+        if !self.missing.is_empty() {
+            return format!("lacks {}", self.missing.join(", "));
+        }
+        match (self.ray_query, self.ray_tracing_pipeline) {
+            (true, true) => "ok: ray queries and ray-tracing pipelines".into(),
+            (true, false) => {
+                format!("ok: ray queries (no ray-tracing pipelines: lacks {})", self.missing_for_pipeline.join(", "))
+            }
+            (false, true) => {
+                format!("ok: ray-tracing pipelines (no ray queries: lacks {})", self.missing_for_query.join(", "))
+            }
+            (false, false) => format!(
+                "cannot trace rays: lacks {} for ray queries and {} for ray-tracing pipelines",
+                self.missing_for_query.join(", "),
+                self.missing_for_pipeline.join(", ")
+            ),
         }
     }
 
@@ -119,12 +162,21 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     }
 
-    let mut ray_query = false;
+    let (mut ray_query, mut ray_tracing_pipeline) = (false, false);
+    let mut missing_for_query = Vec::new();
+    let mut missing_for_pipeline = Vec::new();
+    if !has(ash::khr::ray_query::NAME) {
+        missing_for_query.push(ash::khr::ray_query::NAME.to_string_lossy().into_owned());
+    }
+    if !has(ash::khr::ray_tracing_pipeline::NAME) {
+        missing_for_pipeline.push(ash::khr::ray_tracing_pipeline::NAME.to_string_lossy().into_owned());
+    }
     if properties.api_version >= API_VERSION {
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
         let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let mut rt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
         let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
         // Only chain extension structures the device knows (VUID-VkPhysicalDeviceFeatures2-pNext-pNext).
         if has(ash::khr::acceleration_structure::NAME) {
@@ -132,6 +184,9 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         }
         if has(ash::khr::ray_query::NAME) {
             features = features.push_next(&mut rq);
+        }
+        if has(ash::khr::ray_tracing_pipeline::NAME) {
+            features = features.push_next(&mut rt);
         }
         unsafe { raw.get_physical_device_features2(handle, &mut features) };
         let base = unsafe { raw.get_physical_device_features(handle) };
@@ -149,18 +204,21 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
             // SPIR-V 1.6 compute shaders declare their size with LocalSizeId (VUID-RuntimeSpirv-LocalSizeId-06434).
             (v13.maintenance4, "feature maintenance4"),
             (accel.acceleration_structure, "feature accelerationStructure"),
-            (rq.ray_query, RAY_QUERY_FEATURE),
         ];
         for (value, label) in checks {
             if value == vk::FALSE && !missing.iter().any(|m| label.ends_with(m.as_str())) {
                 missing.push(label.to_string());
             }
         }
-        ray_query = rq.ray_query == vk::TRUE;
         // The extension names already say what is missing when the extension itself is absent.
-        if !has(ash::khr::ray_query::NAME) {
-            missing.retain(|m| m != RAY_QUERY_FEATURE);
+        if has(ash::khr::ray_query::NAME) && rq.ray_query == vk::FALSE {
+            missing_for_query.push("feature rayQuery".into());
         }
+        if has(ash::khr::ray_tracing_pipeline::NAME) && rt.ray_tracing_pipeline == vk::FALSE {
+            missing_for_pipeline.push("feature rayTracingPipeline".into());
+        }
+        ray_query = missing_for_query.is_empty();
+        ray_tracing_pipeline = missing_for_pipeline.is_empty();
         if !has(ash::khr::acceleration_structure::NAME) {
             missing.retain(|m| m != "feature accelerationStructure");
         }
@@ -176,7 +234,10 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         driver_name,
         driver_info,
         ray_query,
+        ray_tracing_pipeline,
         missing,
+        missing_for_query,
+        missing_for_pipeline,
         handle,
     })
 }
@@ -195,13 +256,13 @@ pub fn select_device(reports: &[DeviceReport], selector: Option<&str>, needs: De
     let listing = || {
         let mut s = String::new();
         for r in reports {
-            let status = if r.qualifies() { "ok".to_string() } else { format!("lacks {}", r.missing.join(", ")) };
             s.push_str(&format!(
-                "\n  [{}] {} ({}, Vulkan {}): {status}",
+                "\n  [{}] {} ({}, Vulkan {}): {}",
                 r.index,
                 r.name,
                 r.type_name(),
-                r.api_version_string()
+                r.api_version_string(),
+                r.status()
             ));
         }
         if reports.is_empty() {
@@ -228,14 +289,17 @@ pub fn select_device(reports: &[DeviceReport], selector: Option<&str>, needs: De
             ),
         };
         if !report.qualifies_for(needs) {
-            bail!("device [{}] {} cannot run strata; the devices are:{}", report.index, report.name, listing());
+            bail!(
+                "device [{}] {} cannot run this (it needs {}); the devices are:{}",
+                report.index,
+                report.name,
+                needs.describe(),
+                listing()
+            );
         }
         return Ok(report.index);
     }
-    let what = match needs {
-        DeviceNeeds::RayQueries => "Vulkan 1.3 with ray queries",
-        DeviceNeeds::RasterOnly => "Vulkan 1.3 with acceleration structures",
-    };
+    let what = needs.describe();
     reports
         .iter()
         .filter(|r| r.qualifies_for(needs))
@@ -244,7 +308,7 @@ pub fn select_device(reports: &[DeviceReport], selector: Option<&str>, needs: De
         .ok_or_else(|| {
             anyhow!(
                 "no Vulkan device supports what strata needs ({what}); \
-                 run scripts/setup.sh to install Mesa's lavapipe with VK_KHR_ray_query; the devices are:{}",
+                 run scripts/setup.sh to install Mesa's lavapipe, which has both ways to trace; the devices are:{}",
                 listing()
             )
         })
@@ -262,6 +326,12 @@ pub struct DeviceLimits {
     pub sub_pixel_precision_bits: u32,
 }
 
+/// What a device with `VK_KHR_ray_tracing_pipeline` enabled brings: its commands and its shader-group limits.
+pub struct RayTracingPipelines {
+    pub loader: ash::khr::ray_tracing_pipeline::Device,
+    pub limits: ShaderGroupLimits,
+}
+
 /// The logical device and everything bound to its lifetime. Resources hold an `Arc<Device>`; it is destroyed
 /// when the last one goes, after the allocator and before the instance (which it keeps alive).
 pub struct Device {
@@ -272,16 +342,18 @@ pub struct Device {
     pub queue_family: u32,
     queue: Mutex<vk::Queue>,
     pub accel: ash::khr::acceleration_structure::Device,
+    /// Ray-tracing pipelines, where the device has them (`DeviceReport::ray_tracing_pipeline`).
+    pub ray_tracing: Option<RayTracingPipelines>,
     pub debug_utils: Option<ash::ext::debug_utils::Device>,
     allocator: Mutex<ManuallyDrop<Allocator>>,
     pub(crate) command_pool: Mutex<vk::CommandPool>,
-    compute_pipelines: Mutex<KeptComputePipelines>,
+    kept_pipelines: Mutex<KeptPipelines>,
     pub instance: Arc<Instance>,
 }
 
 impl Device {
-    /// Creates the logical device on the selected physical device with every feature strata needs (ray queries
-    /// only where the device has them, when `needs` is `RasterOnly`).
+    /// Creates the logical device on the selected physical device with every feature strata needs, and ray
+    /// queries and ray-tracing pipelines wherever the device has them.
     pub fn new(instance: Arc<Instance>, selector: Option<&str>, needs: DeviceNeeds) -> Result<Arc<Self>> {
         let reports = enumerate_devices(&instance)?;
         let index = select_device(&reports, selector, needs)?;
@@ -291,7 +363,11 @@ impl Device {
             .ok_or_else(|| anyhow!("{}: no graphics+compute queue", report.name))?;
 
         let mut accel_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
+        let mut rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut accel_props);
+        if report.ray_tracing_pipeline {
+            props2 = props2.push_next(&mut rt_props);
+        }
         unsafe { instance.raw.get_physical_device_properties2(physical, &mut props2) };
         let props = props2.properties;
         let limits = DeviceLimits {
@@ -306,12 +382,14 @@ impl Device {
         let priorities = [1.0f32];
         let queue_info =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let ray_queries = report.ray_query;
-        let extensions: Vec<*const std::ffi::c_char> = REQUIRED_EXTENSIONS
-            .iter()
-            .filter(|e| ray_queries || **e != ash::khr::ray_query::NAME)
-            .map(|e| e.as_ptr())
-            .collect();
+        let (ray_queries, pipelines) = (report.ray_query, report.ray_tracing_pipeline);
+        let mut extensions: Vec<*const std::ffi::c_char> = REQUIRED_EXTENSIONS.iter().map(|e| e.as_ptr()).collect();
+        if ray_queries {
+            extensions.push(ash::khr::ray_query::NAME.as_ptr());
+        }
+        if pipelines {
+            extensions.push(ash::khr::ray_tracing_pipeline::NAME.as_ptr());
+        }
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
             .buffer_device_address(true)
             .scalar_block_layout(true)
@@ -327,6 +405,7 @@ impl Device {
             .maintenance4(true);
         let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
         let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let mut rt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
         let base_features = vk::PhysicalDeviceFeatures::default().shader_int64(true);
         let mut features = vk::PhysicalDeviceFeatures2::default()
             .features(base_features)
@@ -335,6 +414,9 @@ impl Device {
             .push_next(&mut accel);
         if ray_queries {
             features = features.push_next(&mut rq);
+        }
+        if pipelines {
+            features = features.push_next(&mut rt);
         }
         let create_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_info)
@@ -372,6 +454,15 @@ impl Device {
             }
         };
         let accel = ash::khr::acceleration_structure::Device::new(&instance.raw, &raw);
+        let ray_tracing = pipelines.then(|| RayTracingPipelines {
+            loader: ash::khr::ray_tracing_pipeline::Device::new(&instance.raw, &raw),
+            limits: ShaderGroupLimits {
+                handle_size: rt_props.shader_group_handle_size,
+                handle_alignment: rt_props.shader_group_handle_alignment,
+                base_alignment: rt_props.shader_group_base_alignment,
+                max_recursion_depth: rt_props.max_ray_recursion_depth,
+            },
+        });
         let debug_utils =
             instance.debug_utils.as_ref().map(|_| ash::ext::debug_utils::Device::new(&instance.raw, &raw));
         let device = Arc::new(Self {
@@ -382,10 +473,11 @@ impl Device {
             queue_family,
             queue: Mutex::new(queue),
             accel,
+            ray_tracing,
             debug_utils,
             allocator: Mutex::new(ManuallyDrop::new(allocator)),
             command_pool: Mutex::new(command_pool),
-            compute_pipelines: Mutex::new(KeptComputePipelines::default()),
+            kept_pipelines: Mutex::new(KeptPipelines::default()),
             instance,
         });
         device.set_name(device.raw.handle(), &format!("strata device ({})", device.report.name));
@@ -394,12 +486,38 @@ impl Device {
         Ok(device)
     }
 
-    /// Fails, naming `what` and the device, where the device was created without ray queries (`RasterOnly`).
+    /// Fails, naming `what` and the device, where the device has no ray queries.
     pub fn require_ray_queries(&self, what: &str) -> Result<()> {
         if !self.report.ray_query {
-            bail!("{what} traces rays with VK_KHR_ray_query, which {} lacks", self.report.name);
+            bail!(
+                "{what} traces rays with VK_KHR_ray_query, which {} lacks ({})",
+                self.report.name,
+                self.report.missing_for_query.join(", ")
+            );
         }
         Ok(())
+    }
+
+    /// The ray-tracing pipeline commands and limits, or an error naming `what` and what the device lacks.
+    pub fn require_ray_tracing_pipelines(&self, what: &str) -> Result<&RayTracingPipelines> {
+        self.ray_tracing.as_ref().ok_or_else(|| {
+            anyhow!(
+                "{what} traces rays with a ray-tracing pipeline (VK_KHR_ray_tracing_pipeline), which {} lacks ({})",
+                self.report.name,
+                self.report.missing_for_pipeline.join(", ")
+            )
+        })
+    }
+
+    /// The shader stages that may trace rays on this device, for barriers around the passes that do: compute
+    /// (ray queries), and ray tracing where pipelines are enabled (a barrier may name that stage only then:
+    /// VUID-VkMemoryBarrier2-srcStageMask-07946).
+    pub fn tracing_stages(&self) -> vk::PipelineStageFlags2 {
+        if self.ray_tracing.is_some() {
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR
+        } else {
+            vk::PipelineStageFlags2::COMPUTE_SHADER
+        }
     }
 
     /// Gives a Vulkan object a debug-utils name (what validation messages and RenderDoc show).
@@ -415,9 +533,10 @@ impl Device {
         self.allocator.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// The compute pipelines this device keeps (`Pipeline::compute_specialized`).
-    pub fn kept_compute_pipelines(&self) -> MutexGuard<'_, KeptComputePipelines> {
-        self.compute_pipelines.lock().unwrap_or_else(|p| p.into_inner())
+    /// The compute and ray-tracing pipelines this device keeps (`Pipeline::compute_specialized`,
+    /// `Pipeline::ray_tracing`).
+    pub fn kept_pipelines(&self) -> MutexGuard<'_, KeptPipelines> {
+        self.kept_pipelines.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     pub(crate) fn queue(&self) -> MutexGuard<'_, vk::Queue> {
@@ -437,7 +556,7 @@ impl Drop for Device {
             let _ = self.raw.device_wait_idle();
             let pool = *self.command_pool.get_mut().unwrap_or_else(|p| p.into_inner());
             self.raw.destroy_command_pool(pool, None);
-            self.compute_pipelines.get_mut().unwrap_or_else(|p| p.into_inner()).destroy_all(&self.raw);
+            self.kept_pipelines.get_mut().unwrap_or_else(|p| p.into_inner()).destroy_all(&self.raw);
             // The allocator frees its memory blocks; it must go before the device.
             ManuallyDrop::drop(self.allocator.get_mut().unwrap_or_else(|p| p.into_inner()));
             self.raw.destroy_device(None);
@@ -449,7 +568,11 @@ impl Drop for Device {
 mod tests {
     use super::*;
 
-    fn report(index: usize, device_type: vk::PhysicalDeviceType, missing: &[&str]) -> DeviceReport {
+    const NO_QUERY: &str = "VK_KHR_ray_query";
+    const NO_PIPELINE: &str = "VK_KHR_ray_tracing_pipeline";
+
+    /// A device with `missing` lacking for everything, and ray queries and pipelines as given.
+    fn report(index: usize, device_type: vk::PhysicalDeviceType, query: bool, pipeline: bool) -> DeviceReport {
         DeviceReport {
             index,
             name: format!("device {index}"),
@@ -457,35 +580,74 @@ mod tests {
             api_version: API_VERSION,
             driver_name: String::new(),
             driver_info: String::new(),
-            ray_query: !missing.iter().any(|m| about_ray_queries(m)),
-            missing: missing.iter().map(|m| m.to_string()).collect(),
+            ray_query: query,
+            ray_tracing_pipeline: pipeline,
+            missing: Vec::new(),
+            missing_for_query: if query { vec![] } else { vec![NO_QUERY.into()] },
+            missing_for_pipeline: if pipeline { vec![] } else { vec![NO_PIPELINE.into()] },
             handle: vk::PhysicalDevice::null(),
         }
     }
 
     #[test]
-    fn raster_only_devices_may_lack_ray_queries_and_nothing_else() {
-        let no_ray_query = report(0, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query"]);
-        let no_feature = report(1, vk::PhysicalDeviceType::DISCRETE_GPU, &[RAY_QUERY_FEATURE]);
-        let too_old =
-            report(2, vk::PhysicalDeviceType::DISCRETE_GPU, &["VK_KHR_ray_query", "feature dynamicRendering"]);
-        let cpu = report(3, vk::PhysicalDeviceType::CPU, &[]);
-        for r in [&no_ray_query, &no_feature] {
-            assert!(!r.qualifies() && r.qualifies_for(DeviceNeeds::RasterOnly), "{r:?}");
-        }
-        assert!(!too_old.qualifies_for(DeviceNeeds::RasterOnly));
-        assert!(cpu.qualifies() && cpu.qualifies_for(DeviceNeeds::RasterOnly));
+    fn each_need_takes_the_devices_that_have_its_way_to_trace() {
+        use vk::PhysicalDeviceType as T;
+        let both = report(0, T::CPU, true, true);
+        let query_only = report(1, T::INTEGRATED_GPU, true, false);
+        let pipeline_only = report(2, T::DISCRETE_GPU, false, true);
+        let neither = report(3, T::DISCRETE_GPU, false, false);
+        let mut old = report(4, T::DISCRETE_GPU, true, true);
+        old.missing.push("feature dynamicRendering".into());
 
-        // Rendering takes the CPU device with ray queries; raster-only work prefers the discrete GPU without.
-        let reports = [no_ray_query, too_old, cpu];
-        assert_eq!(select_device(&reports, None, DeviceNeeds::RayQueries).unwrap(), 3);
-        assert_eq!(select_device(&reports, None, DeviceNeeds::RasterOnly).unwrap(), 0);
-        let err = select_device(&reports, Some("0"), DeviceNeeds::RayQueries).unwrap_err().to_string();
+        let table = [
+            (&both, [true, true, true, true]),
+            (&query_only, [true, true, false, true]),
+            (&pipeline_only, [true, false, true, true]),
+            (&neither, [false, false, false, true]),
+            (&old, [false, false, false, false]),
+        ];
+        let needs = [
+            DeviceNeeds::RayTracing,
+            DeviceNeeds::RayQueries,
+            DeviceNeeds::RayTracingPipeline,
+            DeviceNeeds::RasterOnly,
+        ];
+        for (r, expected) in table {
+            for (need, want) in needs.iter().zip(expected) {
+                assert_eq!(r.qualifies_for(*need), want, "{} for {need:?}", r.name);
+            }
+        }
+
+        // Preference: discrete, integrated, CPU; among those that qualify.
+        let all = [both.clone(), query_only.clone(), pipeline_only.clone(), neither.clone(), old.clone()];
+        assert_eq!(select_device(&all, None, DeviceNeeds::RayTracing).unwrap(), 2, "the GPU with pipelines only");
+        assert_eq!(select_device(&all, None, DeviceNeeds::RayQueries).unwrap(), 1);
+        assert_eq!(select_device(&all, None, DeviceNeeds::RayTracingPipeline).unwrap(), 2);
+        assert_eq!(select_device(&all, None, DeviceNeeds::RasterOnly).unwrap(), 2);
+        assert_eq!(select_device(&all[..2], None, DeviceNeeds::RayTracingPipeline).unwrap(), 0);
+
+        // What each device lacks, for each way to trace.
+        assert_eq!(both.status(), "ok: ray queries and ray-tracing pipelines");
         assert!(
-            err.contains("device [0] device 0 cannot run strata") && err.contains("lacks VK_KHR_ray_query"),
+            pipeline_only.status().contains("no ray queries: lacks VK_KHR_ray_query"),
+            "{}",
+            pipeline_only.status()
+        );
+        assert!(query_only.status().contains("no ray-tracing pipelines: lacks VK_KHR_ray_tracing_pipeline"));
+        let err =
+            select_device(&[neither.clone(), old.clone()], None, DeviceNeeds::RayTracing).unwrap_err().to_string();
+        assert!(err.contains("ray queries or a ray-tracing pipeline"), "{err}");
+        assert!(
+            err.contains("[3] device 3")
+                && err.contains("lacks VK_KHR_ray_query for ray queries")
+                && err.contains("VK_KHR_ray_tracing_pipeline for ray-tracing pipelines"),
             "{err}"
         );
-        let err = select_device(&reports[..2], None, DeviceNeeds::RayQueries).unwrap_err().to_string();
-        assert!(err.contains("Vulkan 1.3 with ray queries"), "{err}");
+        assert!(err.contains("[4] device 4") && err.contains("lacks feature dynamicRendering"), "{err}");
+
+        // A device named on the command line must have what is asked of it.
+        let err = select_device(&all, Some("1"), DeviceNeeds::RayTracingPipeline).unwrap_err().to_string();
+        assert!(err.contains("device [1] device 1 cannot run this") && err.contains("a ray-tracing pipeline"), "{err}");
+        assert_eq!(select_device(&all, Some("device 2"), DeviceNeeds::RayTracing).unwrap(), 2);
     }
 }

@@ -9,6 +9,7 @@ pub mod memory;
 pub mod pipeline;
 pub mod readback;
 pub mod sampler;
+pub mod shader_binding_table;
 pub mod timer;
 pub mod validation;
 

@@ -1,6 +1,7 @@
 //! Pipelines built from the embedded SPIR-V: shader modules, one descriptor-set layout and push-constant range
-//! per pipeline, compute pipelines and dynamic-rendering graphics pipelines. A pass owns its graphics pipeline;
-//! compute pipelines are kept by the device (`KeptComputePipelines`) and shared by every pass that asks for the same.
+//! per pipeline, compute pipelines, ray-tracing pipelines and dynamic-rendering graphics pipelines. A pass owns
+//! its graphics pipeline; compute and ray-tracing pipelines are kept by the device (`KeptPipelines`) and shared by
+//! every pass that asks for the same.
 use super::descriptors::DescriptorSet;
 use super::device::Device;
 use anyhow::{anyhow, Context as _, Result};
@@ -62,16 +63,18 @@ pub struct Pipeline {
     pub bindings: Vec<Binding>,
     pub push_constant_size: u32,
     pub name: String,
-    /// The handles belong to the device's `KeptComputePipelines`, which destroys them with the device.
+    /// The handles belong to the device's `KeptPipelines`, which destroys them with the device.
     kept_by_device: bool,
     device: Arc<Device>,
 }
 
-/// Everything a compute pipeline is built from: two requests with equal keys get the same pipeline.
+/// Everything a kept pipeline is built from: two requests with equal keys get the same pipeline.
 #[derive(PartialEq, Eq, Hash)]
-struct ComputeKey {
+struct PipelineKey {
     name: String,
-    spirv: Vec<u8>,
+    bind_point: vk::PipelineBindPoint,
+    /// Each stage's SPIR-V, in the order the pipeline's builder takes them.
+    spirv: Vec<Vec<u8>>,
     bindings: Vec<(u32, vk::DescriptorType, u32)>,
     push_constant_size: u32,
     constants: Vec<u32>,
@@ -84,15 +87,16 @@ struct KeptHandles {
     set_layout: vk::DescriptorSetLayout,
 }
 
-/// The compute pipelines a device keeps until it is destroyed. Building one is the costly part of a pass on
-/// lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about 0.8 s, 2 s under
-/// the validation layer; docs/performance.md), and every render builds its passes anew; kept, a program that
-/// renders many frames on one device (an animation, the benchmark, the test suite) builds each variant once.
+/// The compute and ray-tracing pipelines a device keeps until it is destroyed. Building one is the costly part
+/// of a pass on lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about
+/// 0.8 s, 2 s under the validation layer; docs/performance.md), and every render builds its passes anew; kept, a
+/// program that renders many frames on one device (an animation, the benchmark, the test suite) builds each
+/// variant once.
 #[derive(Default)]
-pub struct KeptComputePipelines(HashMap<ComputeKey, KeptHandles>);
+pub struct KeptPipelines(HashMap<PipelineKey, KeptHandles>);
 
-impl KeptComputePipelines {
-    /// How many distinct compute pipelines the device holds.
+impl KeptPipelines {
+    /// How many distinct pipelines the device holds.
     pub fn len(&self) -> usize {
         self.0.len()
     }
@@ -111,6 +115,18 @@ impl KeptComputePipelines {
             }
         }
     }
+}
+
+/// The shaders and layout of a ray-tracing pipeline (`Pipeline::ray_tracing`): (file name, SPIR-V) each.
+pub struct RayTracingDesc<'a> {
+    pub name: &'a str,
+    pub raygen: (&'a str, &'a [u8]),
+    pub miss: (&'a str, &'a [u8]),
+    pub closest_hit: (&'a str, &'a [u8]),
+    pub any_hit: Option<(&'a str, &'a [u8])>,
+    pub bindings: &'a [Binding],
+    pub push_constant_size: u32,
+    pub constants: &'a [u32],
 }
 
 /// Fixed state of a graphics pipeline; viewport and scissor are dynamic.
@@ -184,7 +200,7 @@ impl Pipeline {
 
     /// A compute pipeline whose 32-bit specialization constants `constant_id = i` take `constants[i]`: the
     /// driver compiles the branches they switch off out of the pipeline. Built once per device for each distinct
-    /// request and kept (`KeptComputePipelines`); later requests share it.
+    /// request and kept (`KeptPipelines`); later requests share it.
     pub fn compute_specialized(
         device: &Arc<Device>,
         name: &str,
@@ -193,19 +209,141 @@ impl Pipeline {
         push_constant_size: u32,
         constants: &[u32],
     ) -> Result<Self> {
-        let key = ComputeKey {
+        let key = PipelineKey {
             name: name.to_owned(),
-            spirv: shader.1.to_vec(),
+            bind_point: vk::PipelineBindPoint::COMPUTE,
+            spirv: vec![shader.1.to_vec()],
             bindings: bindings.iter().map(|b| (b.binding, b.kind, b.count)).collect(),
             push_constant_size,
             constants: constants.to_vec(),
         };
+        Self::kept(device, key, bindings, |device, layout, specialization| {
+            let module = ShaderModule::new(device, shader.0, shader.1)?;
+            let mut stage = vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(module.raw)
+                .name(ENTRY);
+            if let Some(specialization) = specialization {
+                stage = stage.specialization_info(specialization);
+            }
+            let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
+            unsafe { device.raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
+                .map_err(|(_, e)| anyhow!(e))
+                .with_context(|| format!("vkCreateComputePipelines {name}"))
+                .map(|p| p[0])
+        })
+    }
+
+    /// A ray-tracing pipeline (`VK_KHR_ray_tracing_pipeline`) of three shader groups, in this order: the raygen
+    /// shader, the miss shader, and one triangle hit group of a closest-hit shader and, where given, an any-hit
+    /// shader. Rays recurse no deeper than the raygen shader's own `traceRayEXT` (maxPipelineRayRecursionDepth
+    /// 1): bounces are loops in the raygen shader. The specialization constants go to every stage. Kept by the
+    /// device like compute pipelines; `ShaderBindingTable` lays out its group handles.
+    pub fn ray_tracing(device: &Arc<Device>, desc: &RayTracingDesc<'_>) -> Result<Self> {
+        let rt = device.require_ray_tracing_pipelines(desc.name)?;
+        let mut stages = vec![desc.raygen, desc.miss, desc.closest_hit];
+        stages.extend(desc.any_hit);
+        let key = PipelineKey {
+            name: desc.name.to_owned(),
+            bind_point: vk::PipelineBindPoint::RAY_TRACING_KHR,
+            spirv: stages.iter().map(|s| s.1.to_vec()).collect(),
+            bindings: desc.bindings.iter().map(|b| (b.binding, b.kind, b.count)).collect(),
+            push_constant_size: desc.push_constant_size,
+            constants: desc.constants.to_vec(),
+        };
+        Self::kept(device, key, desc.bindings, |device, layout, specialization| {
+            let kinds = [
+                vk::ShaderStageFlags::RAYGEN_KHR,
+                vk::ShaderStageFlags::MISS_KHR,
+                vk::ShaderStageFlags::CLOSEST_HIT_KHR,
+                vk::ShaderStageFlags::ANY_HIT_KHR,
+            ];
+            let modules = stages.iter().map(|s| ShaderModule::new(device, s.0, s.1)).collect::<Result<Vec<_>>>()?;
+            let stage_infos: Vec<vk::PipelineShaderStageCreateInfo> = modules
+                .iter()
+                .zip(kinds)
+                .map(|(module, kind)| {
+                    let info = vk::PipelineShaderStageCreateInfo::default().stage(kind).module(module.raw).name(ENTRY);
+                    match specialization {
+                        Some(s) => info.specialization_info(s),
+                        None => info,
+                    }
+                })
+                .collect();
+            let general = |shader: u32| {
+                vk::RayTracingShaderGroupCreateInfoKHR::default()
+                    .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
+                    .general_shader(shader)
+                    .closest_hit_shader(vk::SHADER_UNUSED_KHR)
+                    .any_hit_shader(vk::SHADER_UNUSED_KHR)
+                    .intersection_shader(vk::SHADER_UNUSED_KHR)
+            };
+            let groups = [
+                general(0),
+                general(1),
+                vk::RayTracingShaderGroupCreateInfoKHR::default()
+                    .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
+                    .general_shader(vk::SHADER_UNUSED_KHR)
+                    .closest_hit_shader(2)
+                    .any_hit_shader(if desc.any_hit.is_some() { 3 } else { vk::SHADER_UNUSED_KHR })
+                    .intersection_shader(vk::SHADER_UNUSED_KHR),
+            ];
+            let info = [vk::RayTracingPipelineCreateInfoKHR::default()
+                .stages(&stage_infos)
+                .groups(&groups)
+                .max_pipeline_ray_recursion_depth(1)
+                .layout(layout)];
+            unsafe {
+                rt.loader.create_ray_tracing_pipelines(
+                    vk::DeferredOperationKHR::null(),
+                    vk::PipelineCache::null(),
+                    &info,
+                    None,
+                )
+            }
+            .map_err(|(_, e)| anyhow!(e))
+            .with_context(|| format!("vkCreateRayTracingPipelinesKHR {}", desc.name))
+            .map(|p| p[0])
+        })
+    }
+
+    /// The pipeline `key` names: the device's kept one, or one `build` makes (given the layout and the
+    /// specialization constants, if any) and the device keeps from now on.
+    fn kept(
+        device: &Arc<Device>,
+        key: PipelineKey,
+        bindings: &[Binding],
+        build: impl FnOnce(&Arc<Device>, vk::PipelineLayout, Option<&vk::SpecializationInfo>) -> Result<vk::Pipeline>,
+    ) -> Result<Self> {
+        let (name, bind_point, push_constant_size) = (key.name.clone(), key.bind_point, key.push_constant_size);
         // Held while building, so that two threads asking for the same pipeline build it once.
-        let mut kept = device.kept_compute_pipelines();
+        let mut kept = device.kept_pipelines();
         let handles = match kept.0.get(&key) {
             Some(handles) => *handles,
             None => {
-                let handles = Self::build_compute(device, &key, shader.0, bindings)?;
+                let (set_layout, layout) = Self::new_layout(device, &name, bindings, push_constant_size)?;
+                // Owns the layouts until the pipeline exists, so that a failure below destroys them.
+                let mut owner = Self {
+                    raw: vk::Pipeline::null(),
+                    layout,
+                    set_layout,
+                    bind_point,
+                    bindings: bindings.to_vec(),
+                    push_constant_size,
+                    name: name.clone(),
+                    kept_by_device: false,
+                    device: device.clone(),
+                };
+                let constants = key.constants.as_slice();
+                let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+                    .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
+                    .collect();
+                let data: &[u8] = bytemuck::cast_slice(constants);
+                let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(data);
+                owner.raw = build(device, layout, (!constants.is_empty()).then_some(&specialization))?;
+                device.set_name(owner.raw, &name);
+                owner.kept_by_device = true;
+                let handles = KeptHandles { raw: owner.raw, layout, set_layout };
                 kept.0.insert(key, handles);
                 handles
             }
@@ -214,57 +352,13 @@ impl Pipeline {
             raw: handles.raw,
             layout: handles.layout,
             set_layout: handles.set_layout,
-            bind_point: vk::PipelineBindPoint::COMPUTE,
+            bind_point,
             bindings: bindings.to_vec(),
             push_constant_size,
-            name: name.to_owned(),
+            name,
             kept_by_device: true,
             device: device.clone(),
         })
-    }
-
-    /// Builds the pipeline `key` asks for, its handles for the device to keep.
-    fn build_compute(
-        device: &Arc<Device>,
-        key: &ComputeKey,
-        shader_name: &str,
-        bindings: &[Binding],
-    ) -> Result<KeptHandles> {
-        let name = key.name.as_str();
-        let module = ShaderModule::new(device, shader_name, &key.spirv)?;
-        let (set_layout, layout) = Self::new_layout(device, name, bindings, key.push_constant_size)?;
-        // Owns the layouts until the pipeline exists, so that a failure below destroys them.
-        let mut pipeline = Self {
-            raw: vk::Pipeline::null(),
-            layout,
-            set_layout,
-            bind_point: vk::PipelineBindPoint::COMPUTE,
-            bindings: bindings.to_vec(),
-            push_constant_size: key.push_constant_size,
-            name: name.to_owned(),
-            kept_by_device: false,
-            device: device.clone(),
-        };
-        let constants = key.constants.as_slice();
-        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
-            .map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 })
-            .collect();
-        let data: &[u8] = bytemuck::cast_slice(constants);
-        let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(data);
-        let mut stage = vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::COMPUTE)
-            .module(module.raw)
-            .name(ENTRY);
-        if !constants.is_empty() {
-            stage = stage.specialization_info(&specialization);
-        }
-        let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
-        pipeline.raw = unsafe { device.raw.create_compute_pipelines(vk::PipelineCache::null(), &info, None) }
-            .map_err(|(_, e)| anyhow!(e))
-            .with_context(|| format!("vkCreateComputePipelines {name}"))?[0];
-        device.set_name(pipeline.raw, name);
-        pipeline.kept_by_device = true;
-        Ok(KeptHandles { raw: pipeline.raw, layout, set_layout })
     }
 
     /// A graphics pipeline for dynamic rendering.

@@ -76,8 +76,13 @@ pub struct GpuTest {
 }
 
 impl GpuTest {
-    /// A device with ray queries, for tests that trace rays.
+    /// A device that traces rays (ray queries, a ray-tracing pipeline, or both), for tests that render.
     pub fn new() -> Self {
+        Self::with(DeviceNeeds::RayTracing)
+    }
+
+    /// A device with ray queries, for the tests of the ray probe (a compute shader that traces with them).
+    pub fn ray_queries() -> Self {
         Self::with(DeviceNeeds::RayQueries)
     }
 
@@ -101,7 +106,8 @@ impl GpuTest {
                 Self { gpu: Some(gpu), log, _turn: turn }
             }
             Err(e) => panic!(
-                "GPU tests need the Khronos validation layer and a Vulkan device with VK_KHR_ray_query.\n\
+                "GPU tests need the Khronos validation layer and a Vulkan device that traces rays \
+                 (VK_KHR_ray_query or VK_KHR_ray_tracing_pipeline; the ray-probe tests need ray queries).\n\
                  Run `sudo scripts/setup.sh` to install them (Mesa's lavapipe works without a GPU).\n\
                  The error was: {e:#}"
             ),

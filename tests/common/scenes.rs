@@ -1,12 +1,13 @@
 //! Small scenes built in code for the optics tests, and the measurements those tests make on rendered frames.
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::sync::Arc;
+use strata::render::accumulate::TracePath;
 use strata::render::frame::{render_frame, FrameOptions, RenderedFrame};
 use strata::render::SceneOnGpu;
 use strata::scene::camera::{look_at, Lens};
 #[allow(unused_imports)] // Only the tests that build scenes use it.
 pub use strata::scene::library::place;
-use strata::scene::settings::{RenderSettings, SamplerKind, ToneMap};
+use strata::scene::settings::{RenderSettings, SamplerKind, ToneMap, Trace};
 use strata::scene::{Camera, Material, MipFilter, Primitive, Projection, Sampler, Scene, Wrap};
 use strata::vk::Device;
 
@@ -86,9 +87,46 @@ pub fn settings(width: u32, height: u32, spp: u32, sampler: SamplerKind) -> Rend
     }
 }
 
+/// Renders `scene`. With `settings.trace` left at auto it renders once for every way the device can trace (ray
+/// queries, a ray-tracing pipeline) and fails unless they give the same bits (lavapipe builds both from one
+/// traversal), so every test that renders through here holds both paths to what it checks.
 pub fn render(device: &Arc<Device>, scene: &Scene, settings: &RenderSettings) -> RenderedFrame {
     let on_gpu = SceneOnGpu::upload(device, scene).expect("upload");
-    render_frame(device, scene, &on_gpu, settings, &FrameOptions::default(), &mut |_, _| true).expect("render")
+    let frame = |trace: Trace| {
+        let settings = RenderSettings { trace, ..settings.clone() };
+        render_frame(device, scene, &on_gpu, &settings, &FrameOptions::default(), &mut |_, _| true)
+            .unwrap_or_else(|e| panic!("render ({}): {e:#}", trace.name()))
+    };
+    if settings.trace != Trace::Auto {
+        return frame(settings.trace);
+    }
+    let mut frames = TracePath::available(device).into_iter().map(|path| frame(path.as_trace()));
+    let first = frames.next().expect("the device traces rays one way or the other");
+    for other in frames {
+        assert_same_bits(&first, &other);
+    }
+    first
+}
+
+/// Fails unless two renders of one frame by the two ways to trace agree bit for bit, naming the first pixel that
+/// differs.
+pub fn assert_same_bits(a: &RenderedFrame, b: &RenderedFrame) {
+    let (pa, pb) = (a.stats.trace.name(), b.stats.trace.name());
+    if let Some(i) =
+        a.linear.pixels.iter().zip(&b.linear.pixels).position(|(x, y)| x.map(f32::to_bits) != y.map(f32::to_bits))
+    {
+        let w = a.linear.width as usize;
+        panic!(
+            "--trace {pa} and --trace {pb} differ first at pixel ({}, {}): {:?} against {:?}",
+            i % w,
+            i / w,
+            a.linear.pixels[i],
+            b.linear.pixels[i]
+        );
+    }
+    assert!(a.display == b.display, "--trace {pa} and --trace {pb} give the same radiance but different PNG bytes");
+    let rays = |f: &RenderedFrame| (f.stats.camera_rays, f.stats.shadow_rays, f.stats.secondary_rays);
+    assert_eq!(rays(a), rays(b), "--trace {pa} and --trace {pb} cast different numbers of rays");
 }
 
 /// Mean red radiance over the whole frame.
