@@ -4,7 +4,8 @@
 #
 # What it installs and why:
 #   - Vulkan loader + headers, the Khronos validation layer, vulkaninfo  (running and testing)
-#   - Mesa's lavapipe with VK_KHR_ray_query (Debian 12's own Mesa 22.3 lacks it; bookworm-backports has 25.x)
+#   - Mesa's lavapipe with VK_KHR_ray_query and VK_KHR_ray_tracing_pipeline (Debian 12's own Mesa 22.3 lacks
+#     them; bookworm-backports has 25.x)
 #   - libshaderc-dev, glslang-dev, spirv-tools (static archives the build links; see build/shaderc-link)
 #   - pkg-config, a C/C++ toolchain (the shaderc crate builds a small C++ shim)
 # It never names a mirror: the backports suite is added on the URI the machine's own apt sources already use.
@@ -31,6 +32,13 @@ have_ray_query() {
   local out
   out=$(VK_DRIVER_FILES=$(lvp_icd) vulkaninfo 2>/dev/null) || return 1
   [[ "$out" == *VK_KHR_ray_query* ]]
+}
+# Both ways strata traces: the test suite holds ray queries and ray-tracing pipelines to the same bits.
+have_rt_pipeline() {
+  command -v vulkaninfo >/dev/null || return 1
+  local out
+  out=$(VK_DRIVER_FILES=$(lvp_icd) vulkaninfo 2>/dev/null) || return 1
+  [[ "$out" == *VK_KHR_ray_tracing_pipeline* ]]
 }
 lvp_icd() { ls /usr/share/vulkan/icd.d/lvp_icd*.json 2>/dev/null | head -n1; }
 
@@ -75,13 +83,16 @@ driver=$(printf '%s\n' "$summary" | awk -F'= ' '/driverInfo/{print $2; exit}')
 mesa=$(dpkg-query -W -f='${Version}' mesa-vulkan-drivers 2>/dev/null || echo unknown)
 layer=$(dpkg-query -W -f='${Version}' vulkan-validationlayers 2>/dev/null || echo missing)
 if have_ray_query; then rq=yes; else rq=no; fi
+if have_rt_pipeline; then rtp=yes; else rtp=no; fi
 echo "setup: device:            ${device:-none found}"
 echo "setup: driver:            ${driver:-unknown}"
 echo "setup: mesa package:      $mesa"
 echo "setup: validation layer:  $layer"
 echo "setup: VK_KHR_ray_query:  $rq"
-if [ "$rq" != yes ]; then
-  echo "setup: FAILED: lavapipe does not report VK_KHR_ray_query; strata needs a Mesa with ray queries (25.0+)" >&2
+echo "setup: VK_KHR_ray_tracing_pipeline: $rtp"
+if [ "$rq" != yes ] || [ "$rtp" != yes ]; then
+  echo "setup: FAILED: lavapipe lacks VK_KHR_ray_query or VK_KHR_ray_tracing_pipeline; the tests need a Mesa" \
+       "with both (25.0+)" >&2
   exit 1
 fi
 # Rust is the user's (rustup); Debian 12's own cargo is too old for strata's dependencies.

@@ -140,6 +140,7 @@ pub fn time_frame(
     (width, height): (u32, u32),
     spp: u32,
     primary: crate::scene::settings::Primary,
+    trace: crate::scene::settings::Trace,
     probe: bool,
 ) -> Result<FrameFigure> {
     use crate::render::frame::{render_frame, FrameOptions};
@@ -153,6 +154,7 @@ pub fn time_frame(
         spp,
         sampler: crate::scene::settings::SamplerKind::Jittered,
         primary,
+        trace,
         ..Default::default()
     };
     let options = FrameOptions { timestamps: true, ..Default::default() };
@@ -206,6 +208,17 @@ pub fn time_frame(
         replay_shadow_rays = logged.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64;
     }
     Ok(FrameFigure { stats, scene_bytes, probe_rays, probe_ms, replay_rays, replay_shadow_rays, replay_ms })
+}
+
+/// Wall-clock milliseconds to create the accumulation pass's pipeline for `path` (its alpha-tested variant, with
+/// the any-hit shader) on a device that holds none yet: what the first frame of a render pays. Mesa's shader
+/// disk cache may hold the compiled code from an earlier run; the figure is then the cached cost.
+pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TracePath) -> Result<f64> {
+    let started = std::time::Instant::now();
+    let pass = crate::render::accumulate::AccumulatePass::new(&gpu.device, path, 1, false, true, 0)?;
+    let ms = started.elapsed().as_secs_f64() * 1e3;
+    drop(pass);
+    Ok(ms)
 }
 
 /// Least-squares exponent b of y = a·x^b.

@@ -474,7 +474,7 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
     };
     for scene in ["scenes/cornell.toml:", "scenes/showcase.toml:"] {
         let start = text.find(scene).unwrap_or_else(|| panic!("no {scene} section in:\n{text}"));
-        let section: Vec<&str> = text[start..].lines().skip(1).take(7).collect();
+        let section: Vec<&str> = text[start..].lines().skip(1).take(9).collect();
         let find = |prefix: &str| {
             *section
                 .iter()
@@ -491,7 +491,14 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
         assert!(number_after(replay, "M rays/s,") > 0.0, "{replay}");
         assert!(number_after(find("reference mode"), "frame") > 0.0);
         assert!(number_after(find("device memory"), "=") > 0.0);
+        for mode in ["raster", "rays"] {
+            let line = find(&format!("ways to trace, --primary {mode}:"));
+            assert!(number_after(line, "query") > 0.0 && number_after(line, "pipeline") > 0.0, "{line}");
+            assert!(number_after(line, "pipeline/query") > 0.0, "{line}");
+        }
     }
+    let creation = text.lines().find(|l| l.starts_with("accumulate pipeline creation")).expect("a creation line");
+    assert!(number_after(creation, ": query") > 0.0 && number_after(creation, ", pipeline") > 0.0, "{creation}");
     let scaling = text.lines().find(|l| l.starts_with("scaling")).unwrap_or_else(|| panic!("no scaling line:\n{text}"));
     for label in ["spp^", "pixels^"] {
         let rest = &scaling[scaling.find(label).unwrap() + label.len()..];

@@ -33,22 +33,44 @@ pub fn bench(args: BenchArgs) -> Result<()> {
 }
 
 fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
-    use strata::bench::{fitted_exponent, time_frame};
-    use strata::scene::settings::Primary;
+    use strata::bench::{fitted_exponent, time_frame, time_pipeline_creation};
+    use strata::render::accumulate::TracePath;
+    use strata::scene::settings::{Primary, Trace};
     let (w, h) = args.size;
     let pixels = f64::from(w) * f64::from(h);
     println!(
         "Frames of distributed ray tracing at {w}x{h}, {} spp (jittered), on {}",
         args.spp, gpu.device.report.name
     );
+    // Every way the device can trace, the one auto takes first; the bare probe needs ray queries.
+    let paths = TracePath::available(&gpu.device);
+    let auto = TracePath::choose(Trace::Auto, &gpu.device)?;
+    let creation: Vec<String> = paths
+        .iter()
+        .map(|p| Ok(format!("{} {:.0} ms", p.name(), time_pipeline_creation(&gpu, *p)?)))
+        .collect::<Result<_>>()?;
+    println!("accumulate pipeline creation (alpha-tested variant, wall clock): {}", creation.join(", "));
     for path in [&args.scene, &args.showcase] {
         let mut scene = strata::load_scene(path)?;
         if !scene.has_light() {
             scene.add_default_light();
         }
         eprint!("\r{} ...", path.display());
-        let f = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, true)?;
-        let traced = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, false)?;
+        let probe = auto == TracePath::Query;
+        let f = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, auto.as_trace(), probe)?;
+        let traced = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, auto.as_trace(), false)?;
+        // The other ways to trace, both primary modes, for the side-by-side line.
+        let mut by_path = Vec::new();
+        for other in &paths {
+            let (raster, rays) = if *other == auto {
+                (f.stats.clone(), traced.stats.clone())
+            } else {
+                let t = other.as_trace();
+                let raster = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, t, false)?.stats;
+                (raster, time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, t, false)?.stats)
+            };
+            by_path.push((*other, raster, rays));
+        }
         eprint!("\r\x1b[2K");
         let s = &f.stats;
         let t = s.pass_times.unwrap_or_default();
@@ -79,23 +101,27 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             s.shadow_rays as f64 / (t.accumulate_ms / 1e3) / 1e6,
             s.secondary_rays as f64 / (t.accumulate_ms / 1e3) / 1e6
         );
-        println!(
-            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): {:.1}% \
-             (target >= 60%)",
-            accumulate_rays_per_s / 1e6,
-            probe_rays_per_s / 1e6,
-            f.probe_rays,
-            100.0 * accumulate_rays_per_s / probe_rays_per_s
-        );
-        let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
-        println!(
-            "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest hit), \
-             no shading: {:.2} M rays/s, {:.1}%",
-            f.replay_shadow_rays,
-            f.replay_rays - f.replay_shadow_rays,
-            replay_rays_per_s / 1e6,
-            100.0 * accumulate_rays_per_s / replay_rays_per_s
-        );
+        if probe {
+            println!(
+                "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): \
+                 {:.1}% (target >= 60%)",
+                accumulate_rays_per_s / 1e6,
+                probe_rays_per_s / 1e6,
+                f.probe_rays,
+                100.0 * accumulate_rays_per_s / probe_rays_per_s
+            );
+            let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
+            println!(
+                "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest \
+                 hit), no shading: {:.2} M rays/s, {:.1}%",
+                f.replay_shadow_rays,
+                f.replay_rays - f.replay_shadow_rays,
+                replay_rays_per_s / 1e6,
+                100.0 * accumulate_rays_per_s / replay_rays_per_s
+            );
+        } else {
+            println!("  (no bare ray-query probe: {} has no ray queries)", gpu.device.report.name);
+        }
         let traced_times = traced.stats.pass_times.unwrap_or_default();
         println!(
             "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \
@@ -111,6 +137,7 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             frame_bytes as f64 / pixels,
             s.image_bytes as f64 / pixels
         );
+        print_paths_side_by_side(&by_path);
     }
     // Scaling: total GPU time against spp at a fixed size, and against pixels at a fixed spp.
     let mut scene = strata::load_scene(&args.scene)?;
@@ -123,13 +150,13 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     let mut by_spp = Vec::new();
     for spp in [8u32, 16, 32] {
         eprint!("\rscaling: {spp} spp ...");
-        let f = time_frame(&gpu, &scene, half, spp, Primary::Raster, false)?;
+        let f = time_frame(&gpu, &scene, half, spp, Primary::Raster, Trace::Auto, false)?;
         by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     let mut by_pixels = Vec::new();
     for size in [quarter, half, (w, h)] {
         eprint!("\rscaling: {}x{} ...", size.0, size.1);
-        let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, false)?;
+        let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, Trace::Auto, false)?;
         by_pixels.push((f64::from(size.0 * size.1), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     eprint!("\r\x1b[2K");
@@ -144,6 +171,35 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         quarter.1
     );
     Ok(())
+}
+
+/// One line per primary mode: each way to trace's accumulate ms per sample and rays/s, and pipeline/query.
+fn print_paths_side_by_side(
+    by_path: &[(
+        strata::render::accumulate::TracePath,
+        strata::render::frame::FrameStats,
+        strata::render::frame::FrameStats,
+    )],
+) {
+    use strata::render::accumulate::TracePath;
+    for (mode, pick) in [("raster", 0usize), ("rays", 1)] {
+        let mut parts = Vec::new();
+        let mut ms_of = Vec::new();
+        for (path, raster, rays) in by_path {
+            let s = if pick == 0 { raster } else { rays };
+            let t = s.pass_times.unwrap_or_default();
+            let ms = t.accumulate_ms / f64::from(s.samples.max(1));
+            let rays = (s.camera_rays + s.shadow_rays + s.secondary_rays) as f64 / (t.accumulate_ms / 1e3);
+            parts.push(format!("{} {ms:.2} ms/sample, {:.2} M rays/s", path.name(), rays / 1e6));
+            ms_of.push((*path, ms));
+        }
+        let ms = |want: TracePath| ms_of.iter().find(|(p, _)| *p == want).map(|(_, ms)| *ms);
+        let ratio = match (ms(TracePath::Pipeline), ms(TracePath::Query)) {
+            (Some(p), Some(q)) => format!("; pipeline/query {:.2}x (target <= 1.25x)", p / q),
+            _ => String::new(),
+        };
+        println!("  ways to trace, --primary {mode}: {}{ratio}", parts.join(" | "));
+    }
 }
 
 fn bench_gbuffer(args: &BenchArgs, gpu: Gpu) -> Result<()> {

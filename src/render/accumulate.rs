@@ -125,23 +125,7 @@ impl AccumulatePass {
         alpha_tested: bool,
         table_shift: u64,
     ) -> Result<Self> {
-        let bindings = [
-            Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
-            // Every G-buffer attachment but the ids, which binding 2 reads as unsigned integers.
-            Binding {
-                binding: 1,
-                kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                count: ATTACHMENTS.len() as u32 - 1,
-            },
-            Binding::new(2, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-            Binding::new(3, vk::DescriptorType::STORAGE_IMAGE),
-            Binding::new(4, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(5, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(6, vk::DescriptorType::STORAGE_BUFFER),
-            Binding { binding: 7, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
-            Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
-        ];
+        let bindings = Self::bindings(texture_count);
         let constants = [u32::from(primary_rays), u32::from(alpha_tested)];
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
         let mode = if primary_rays { " (primary rays)" } else { "" };
@@ -184,6 +168,28 @@ impl AccumulatePass {
             },
         )?;
         Ok(Self { tracer, gbuffer_sampler, device: device.clone() })
+    }
+
+    /// The pass's descriptor bindings, as `shaders/include/accumulate_bindings.glsl` declares them (every stage
+    /// of both ways to trace reads the one set; tests/contracts.rs holds the SPIR-V to this list).
+    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+        vec![
+            Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
+            // Every G-buffer attachment but the ids, which binding 2 reads as unsigned integers.
+            Binding {
+                binding: 1,
+                kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                count: ATTACHMENTS.len() as u32 - 1,
+            },
+            Binding::new(2, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
+            Binding::new(3, vk::DescriptorType::STORAGE_IMAGE),
+            Binding::new(4, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(5, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(6, vk::DescriptorType::STORAGE_BUFFER),
+            Binding { binding: 7, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+            Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
+        ]
     }
 
     pub fn path(&self) -> TracePath {

@@ -1,0 +1,277 @@
+//! The contracts between Rust and GLSL, read from the SPIR-V strata embeds: every member offset of the
+//! accumulation pass's push constants and of the structs its buffers hold, and every descriptor binding's number
+//! and type, against the Rust side (`render::accumulate_layout`, `AccumulatePass::bindings`). A change made on one
+//! side alone fails here. The SPIR-V is walked by hand (SPIR-V spec 2.3, "Physical Layout"; 3.32, instructions):
+//! names, decorations, types and variables are all this needs.
+use std::collections::HashMap;
+use std::mem::offset_of;
+use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord};
+
+const OP_NAME: u32 = 5;
+const OP_MEMBER_NAME: u32 = 6;
+const OP_TYPE_IMAGE: u32 = 25;
+const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
+const OP_TYPE_ARRAY: u32 = 28;
+const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
+const OP_TYPE_STRUCT: u32 = 30;
+const OP_TYPE_POINTER: u32 = 32;
+const OP_VARIABLE: u32 = 59;
+const OP_DECORATE: u32 = 71;
+const OP_MEMBER_DECORATE: u32 = 72;
+const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
+const DECORATION_BINDING: u32 = 33;
+const DECORATION_OFFSET: u32 = 35;
+const STORAGE_UNIFORM_CONSTANT: u32 = 0;
+const STORAGE_PUSH_CONSTANT: u32 = 9;
+const STORAGE_STORAGE_BUFFER: u32 = 12;
+
+/// What the test reads of one module.
+#[derive(Default)]
+struct Module {
+    names: HashMap<u32, String>,
+    member_names: HashMap<(u32, u32), String>,
+    member_offsets: HashMap<(u32, u32), u32>,
+    bindings: HashMap<u32, u32>,
+    /// Result id → (opcode, operands after the result id).
+    types: HashMap<u32, (u32, Vec<u32>)>,
+    /// (variable id, pointer type id, storage class).
+    variables: Vec<(u32, u32, u32)>,
+}
+
+fn string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).take_while(|b| *b != 0).collect();
+    String::from_utf8(bytes).unwrap()
+}
+
+fn parse(words: &[u32]) -> Module {
+    assert_eq!(words[0], 0x0723_0203, "not SPIR-V");
+    let mut m = Module::default();
+    let mut i = 5;
+    while i < words.len() {
+        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let w = &words[i + 1..i + count];
+        match op {
+            OP_NAME => {
+                m.names.insert(w[0], string(&w[1..]));
+            }
+            OP_MEMBER_NAME => {
+                m.member_names.insert((w[0], w[1]), string(&w[2..]));
+            }
+            OP_DECORATE if w[1] == DECORATION_BINDING => {
+                m.bindings.insert(w[0], w[2]);
+            }
+            OP_MEMBER_DECORATE if w[2] == DECORATION_OFFSET => {
+                m.member_offsets.insert((w[0], w[1]), w[3]);
+            }
+            OP_VARIABLE => m.variables.push((w[1], w[0], w[2])),
+            OP_TYPE_IMAGE
+            | OP_TYPE_SAMPLED_IMAGE
+            | OP_TYPE_ARRAY
+            | OP_TYPE_RUNTIME_ARRAY
+            | OP_TYPE_STRUCT
+            | OP_TYPE_POINTER
+            | OP_TYPE_ACCELERATION_STRUCTURE => {
+                m.types.insert(w[0], (op, w[1..].to_vec()));
+            }
+            _ => {}
+        }
+        i += count.max(1);
+    }
+    m
+}
+
+impl Module {
+    /// The laid-out struct type named `name` (GLSL's struct or block name): glslang also emits an undecorated
+    /// copy of a struct for local variables, which has no offsets.
+    fn struct_named(&self, name: &str) -> Option<u32> {
+        self.types
+            .iter()
+            .find(|(id, (op, _))| {
+                *op == OP_TYPE_STRUCT
+                    && self.names.get(id).map(String::as_str) == Some(name)
+                    && self.member_offsets.contains_key(&(**id, 0))
+            })
+            .map(|(id, _)| *id)
+    }
+
+    /// Member name → offset of struct `id`.
+    fn offsets(&self, id: u32) -> HashMap<String, u32> {
+        let members = self.types[&id].1.len() as u32;
+        (0..members)
+            .map(|k| {
+                let name = self.member_names.get(&(id, k)).cloned().unwrap_or_else(|| format!("member {k}"));
+                let offset = *self.member_offsets.get(&(id, k)).unwrap_or_else(|| panic!("{name} of %{id}: no offset"));
+                (name, offset)
+            })
+            .collect()
+    }
+
+    /// Strips pointers and arrays: the type a variable holds elements of.
+    fn element(&self, mut id: u32) -> u32 {
+        loop {
+            match &self.types[&id] {
+                (OP_TYPE_POINTER, ops) => id = ops[1],
+                (OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY, ops) => id = ops[0],
+                _ => return id,
+            }
+        }
+    }
+
+    /// Binding number → (the variable's name or its block's, the Vulkan descriptor type it needs).
+    fn descriptor_bindings(&self) -> HashMap<u32, (String, ash::vk::DescriptorType)> {
+        use ash::vk::DescriptorType as D;
+        let mut out = HashMap::new();
+        for &(var, pointer, storage) in &self.variables {
+            let Some(&binding) = self.bindings.get(&var) else { continue };
+            let element = self.element(pointer);
+            let name = self.names.get(&var).filter(|n| !n.is_empty()).or(self.names.get(&element)).cloned();
+            let kind = match (storage, self.types[&element].0) {
+                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_ACCELERATION_STRUCTURE) => D::ACCELERATION_STRUCTURE_KHR,
+                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_SAMPLED_IMAGE) => D::COMBINED_IMAGE_SAMPLER,
+                // Sampled 2 in OpTypeImage: a storage image.
+                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_IMAGE) if self.types[&element].1[5] == 2 => D::STORAGE_IMAGE,
+                (STORAGE_STORAGE_BUFFER, OP_TYPE_STRUCT) => D::STORAGE_BUFFER,
+                other => panic!("binding {binding}: a kind this test does not know: {other:?}"),
+            };
+            out.insert(binding, (name.unwrap_or_default(), kind));
+        }
+        out
+    }
+
+    /// The push-constant block, where the stage reads one (the optimizer drops it from a stage that does not).
+    fn push_constant_block(&self) -> Option<u32> {
+        let blocks: Vec<u32> =
+            self.variables.iter().filter(|v| v.2 == STORAGE_PUSH_CONSTANT).map(|v| self.element(v.1)).collect();
+        assert!(blocks.len() <= 1, "more than one push-constant block");
+        blocks.first().copied()
+    }
+}
+
+fn module(name: &str) -> Module {
+    let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == name).unwrap_or_else(|| panic!("no {name}"));
+    parse(&ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap())
+}
+
+/// Member name (as GLSL spells it) → offset in the Rust struct.
+fn push_offsets() -> Vec<(&'static str, usize)> {
+    macro_rules! of {
+        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
+    }
+    let mut v = of!(AccumulatePush; eye, forward, background, width, height, sample_index, sample_count, sampler_kind,
+        seed, light_offset, light_count, analytic_light_count, counter_slot, max_depth, total_light_power, ray_log,
+        indirect, direct_light, alpha_moment);
+    let pad = offset_of!(AccumulatePush, pad);
+    v.extend([("pad_end0", pad), ("pad_end1", pad + 4), ("pad_end2", pad + 8)]);
+    v
+}
+
+fn struct_offsets() -> Vec<(&'static str, Vec<(&'static str, usize)>)> {
+    macro_rules! of {
+        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
+    }
+    let mut record = of!(GpuPrimitiveRecord; positions, normals, uvs, indices, colors, dpdu, dpdv, material, uvs1);
+    record.push(("pad0", offset_of!(GpuPrimitiveRecord, pad)));
+    vec![
+        (
+            "GpuLight",
+            of!(GpuLight; position_kind, axis_u, axis_v, normal, emission, cone, uv01, uv2_material, corner_alpha,
+                uv1_01, uv1_2),
+        ),
+        ("GpuPrimitiveRecord", record),
+        ("GpuCamera", of!(GpuCamera; world_from_camera, lens, range)),
+    ]
+}
+
+/// The differences between a module's struct and the Rust one: empty when they agree member for member.
+fn compare(m: &Module, id: u32, rust: &[(&str, usize)]) -> Vec<String> {
+    let glsl = m.offsets(id);
+    let mut problems = Vec::new();
+    for (name, offset) in rust {
+        match glsl.get(*name) {
+            Some(&o) if o as usize == *offset => {}
+            Some(&o) => problems.push(format!("{name}: GLSL offset {o}, Rust {offset}")),
+            None => problems.push(format!("{name}: in Rust, not in GLSL")),
+        }
+    }
+    for name in glsl.keys() {
+        if !rust.iter().any(|(n, _)| n == name) {
+            problems.push(format!("{name}: in GLSL, not in Rust"));
+        }
+    }
+    problems
+}
+
+/// Every check of one module; the problems found.
+fn check_module(m: &Module) -> Vec<String> {
+    let mut problems: Vec<String> = m
+        .push_constant_block()
+        .map(|block| compare(m, block, &push_offsets()))
+        .unwrap_or_default()
+        .into_iter()
+        .map(|p| format!("AccumulatePush.{p}"))
+        .collect();
+    for (name, rust) in struct_offsets() {
+        // A stage that does not use a struct need not hold it (the hit shaders read no cameras).
+        if let Some(id) = m.struct_named(name) {
+            problems.extend(compare(m, id, &rust).into_iter().map(|p| format!("{name}.{p}")));
+        }
+    }
+    let rust_bindings = strata::render::accumulate::AccumulatePass::bindings(1);
+    for (binding, (name, kind)) in m.descriptor_bindings() {
+        match rust_bindings.iter().find(|b| b.binding == binding) {
+            Some(b) if b.kind == kind => {}
+            Some(b) => problems.push(format!("binding {binding} ({name}): GLSL needs {kind:?}, Rust has {:?}", b.kind)),
+            None => problems.push(format!("binding {binding} ({name}): in GLSL, not in Rust")),
+        }
+    }
+    problems
+}
+
+#[test]
+fn every_accumulation_stage_agrees_with_the_rust_layouts_and_bindings() {
+    for name in ["accumulate.comp", "accumulate.rgen", "accumulate.rahit"] {
+        let m = module(name);
+        if name != "accumulate.rahit" {
+            assert!(m.push_constant_block().is_some(), "{name} reads no push constants");
+        }
+        let problems = check_module(&m);
+        assert!(problems.is_empty(), "{name} disagrees with the Rust side:\n{}", problems.join("\n"));
+    }
+    // The compute shader uses every binding the Rust side declares.
+    let used = module("accumulate.comp").descriptor_bindings();
+    for b in strata::render::accumulate::AccumulatePass::bindings(1) {
+        assert!(
+            used.contains_key(&b.binding),
+            "binding {} is declared in Rust but not read by accumulate.comp",
+            b.binding
+        );
+    }
+}
+
+/// The check can fail: the SPIR-V of accumulate.comp with one GLSL offset moved (what `layout(offset = …)` or a
+/// reordered member in accumulate_layout.glsl would write) and one binding renumbered is caught, naming both.
+#[test]
+fn a_change_on_the_glsl_side_alone_is_caught() {
+    let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == "accumulate.comp").unwrap();
+    let mut words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap();
+    let m = parse(&words);
+    let block = m.push_constant_block().expect("accumulate.comp reads push constants");
+    let seed_member = (0..).find(|k| m.member_names[&(block, *k)] == "seed").unwrap();
+    let camera_var =
+        m.variables.iter().find(|v| m.names.get(&m.element(v.1)).map(String::as_str) == Some("Cameras")).unwrap().0;
+    let mut i = 5;
+    while i < words.len() {
+        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let w = &mut words[i + 1..i + count];
+        if op == OP_MEMBER_DECORATE && w[0] == block && w[1] == seed_member && w[2] == DECORATION_OFFSET {
+            w[3] += 4;
+        }
+        if op == OP_DECORATE && w[0] == camera_var && w[1] == DECORATION_BINDING {
+            w[2] = 11;
+        }
+        i += count;
+    }
+    let problems = check_module(&parse(&words)).join("\n");
+    assert!(problems.contains("AccumulatePush.seed: GLSL offset 72, Rust 68"), "{problems}");
+    assert!(problems.contains("binding 11 (Cameras): in GLSL, not in Rust"), "{problems}");
+}
