@@ -16,14 +16,14 @@ layout(location = 5) in vec3 in_dpdv;
 layout(location = 6) flat in uint in_draw;
 layout(location = 7) in vec2 in_uv1;
 
-layout(location = 0) out vec4 out_position;
-layout(location = 1) out vec4 out_shading_normal;
-layout(location = 2) out vec4 out_geometric_normal;
-layout(location = 3) out vec4 out_albedo;
-layout(location = 4) out vec4 out_material;
-layout(location = 5) out vec4 out_emission;
-layout(location = 6) out vec4 out_specular_color;
-layout(location = 7) out uvec2 out_ids;
+layout(location = GBUFFER_POSITION) out vec4 out_position;
+layout(location = GBUFFER_SHADING_NORMAL) out vec4 out_shading_normal;
+layout(location = GBUFFER_GEOMETRIC_NORMAL) out vec4 out_geometric_normal;
+layout(location = GBUFFER_ALBEDO) out vec4 out_albedo;
+layout(location = GBUFFER_MATERIAL) out vec4 out_material;
+layout(location = GBUFFER_EMISSION) out vec4 out_emission;
+layout(location = GBUFFER_SPECULAR_COLOR) out vec4 out_specular_color;
+layout(location = GBUFFER_IDS) out uvec2 out_ids;
 
 void main() {
     GBufferDraw d = draws[in_draw];
@@ -89,7 +89,7 @@ void main() {
         transmission *=
             texture(textures[nonuniformEXT(m.transmission_texture)], texture_uv(m.transmission_uv_rows, in_uv, in_uv1)).r;
     }
-    out_material = vec4(metallic_roughness, transmission, clamp((m.ior - 1.0) / 3.0, 0.0, 1.0));
+    out_material = vec4(metallic_roughness, transmission, pack_ior(m.ior));
     out_emission = vec4(emission, 0.0);
     // The texel alone: the factor may exceed 1, beyond what this 8-bit sRGB attachment holds.
     out_specular_color = vec4(1.0);

@@ -19,6 +19,7 @@ const OP_VARIABLE: u32 = 59;
 const OP_DECORATE: u32 = 71;
 const OP_MEMBER_DECORATE: u32 = 72;
 const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
+const DECORATION_LOCATION: u32 = 30;
 const DECORATION_BINDING: u32 = 33;
 const DECORATION_OFFSET: u32 = 35;
 const STORAGE_UNIFORM_CONSTANT: u32 = 0;
@@ -32,6 +33,7 @@ struct Module {
     member_names: HashMap<(u32, u32), String>,
     member_offsets: HashMap<(u32, u32), u32>,
     bindings: HashMap<u32, u32>,
+    locations: HashMap<u32, u32>,
     /// Result id → (opcode, operands after the result id).
     types: HashMap<u32, (u32, Vec<u32>)>,
     /// (variable id, pointer type id, storage class).
@@ -59,6 +61,9 @@ fn parse(words: &[u32]) -> Module {
             }
             OP_DECORATE if w[1] == DECORATION_BINDING => {
                 m.bindings.insert(w[0], w[2]);
+            }
+            OP_DECORATE if w[1] == DECORATION_LOCATION => {
+                m.locations.insert(w[0], w[2]);
             }
             OP_MEMBER_DECORATE if w[2] == DECORATION_OFFSET => {
                 m.member_offsets.insert((w[0], w[1]), w[3]);
@@ -274,4 +279,33 @@ fn a_change_on_the_glsl_side_alone_is_caught() {
     let problems = check_module(&parse(&words)).join("\n");
     assert!(problems.contains("AccumulatePush.seed: GLSL offset 72, Rust 68"), "{problems}");
     assert!(problems.contains("binding 11 (Cameras): in GLSL, not in Rust"), "{problems}");
+}
+
+/// The G-buffer's attachments: gbuffer.frag writes each at the location the Rust side creates it at
+/// (`render::gbuffer_layout`), by name.
+#[test]
+fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
+    use strata::render::gbuffer_layout as g;
+    const STORAGE_OUTPUT: u32 = 3;
+    let m = module("gbuffer.frag");
+    let outputs: HashMap<String, u32> = m
+        .variables
+        .iter()
+        .filter(|v| v.2 == STORAGE_OUTPUT)
+        .map(|v| (m.names[&v.0].clone(), m.locations[&v.0]))
+        .collect();
+    let rust = [
+        ("out_position", g::POSITION),
+        ("out_shading_normal", g::SHADING_NORMAL),
+        ("out_geometric_normal", g::GEOMETRIC_NORMAL),
+        ("out_albedo", g::ALBEDO),
+        ("out_material", g::MATERIAL),
+        ("out_emission", g::EMISSION),
+        ("out_specular_color", g::SPECULAR_COLOR),
+        ("out_ids", g::IDS),
+    ];
+    assert_eq!(outputs.len(), g::ATTACHMENTS.len(), "{outputs:?}");
+    for (name, index) in rust {
+        assert_eq!(outputs.get(name).copied(), Some(index as u32), "{name}: {outputs:?}");
+    }
 }

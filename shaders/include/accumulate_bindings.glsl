@@ -14,8 +14,8 @@ layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
-// position, shading normal, geometric normal, albedo, material, emission, specular colour (gbuffer_layout.rs).
-layout(set = 0, binding = 1) uniform sampler2D gbuffer[7];
+// Every attachment but the ids, at its GBUFFER_* index (gbuffer_layout.glsl).
+layout(set = 0, binding = 1) uniform sampler2D gbuffer[GBUFFER_IDS];
 layout(set = 0, binding = 2) uniform usampler2D gbuffer_ids;
 layout(set = 0, binding = 3, rgba32f) uniform image2D accumulation;
 layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };

@@ -13,7 +13,7 @@ const int BUMP_SINE = 3;
 const int BUMP_CENTRAL_DIFFERENCES = 0;
 const int BUMP_ANALYTIC = 1;
 
-// Mirrors `GpuBump` in src/render/gpu_material.rs.
+// Mirrors `GpuBump` in src/render/gbuffer_layout.rs.
 struct Bump {
     int kind;
     float amplitude;

@@ -174,20 +174,20 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
 
 Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     Surface s;
-    vec4 pos = texelFetch(gbuffer[0], p, 0);
-    vec4 mat = texelFetch(gbuffer[4], p, 0);
+    vec4 pos = texelFetch(gbuffer[GBUFFER_POSITION], p, 0);
+    vec4 mat = texelFetch(gbuffer[GBUFFER_MATERIAL], p, 0);
     s.position = pos.xyz;
-    s.normal = normalize(texelFetch(gbuffer[1], p, 0).xyz);
-    vec4 geometric = texelFetch(gbuffer[2], p, 0);
+    s.normal = normalize(texelFetch(gbuffer[GBUFFER_SHADING_NORMAL], p, 0).xyz);
+    vec4 geometric = texelFetch(gbuffer[GBUFFER_GEOMETRIC_NORMAL], p, 0);
     s.geometric = normalize(geometric.xyz);
-    s.emission = texelFetch(gbuffer[5], p, 0).rgb;
-    s.m.albedo = texelFetch(gbuffer[3], p, 0).rgb;
+    s.emission = texelFetch(gbuffer[GBUFFER_EMISSION], p, 0).rgb;
+    s.m.albedo = texelFetch(gbuffer[GBUFFER_ALBEDO], p, 0).rgb;
     s.m.metallic = mat.x;
     s.m.roughness = mat.y;
     s.m.transmission = mat.z;
-    s.m.ior = 1.0 + 3.0 * mat.w;
+    s.m.ior = unpack_ior(mat.w);
     s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
-    s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[6], p, 0).rgb;
+    s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[GBUFFER_SPECULAR_COLOR], p, 0).rgb;
     face_viewer(s, v, materials[material]);
     return s;
 }
@@ -490,7 +490,7 @@ vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout
     } else {
         uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
         if (ids.x != 0u) {
-            vec3 position = texelFetch(gbuffer[0], p, 0).xyz;
+            vec3 position = texelFetch(gbuffer[GBUFFER_POSITION], p, 0).xyz;
             vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
             r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
             Surface s = gbuffer_surface(p, ids.y, v);
