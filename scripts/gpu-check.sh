@@ -112,14 +112,14 @@ step() {  # step NAME LOG COMMAND...: runs it, notes pass or fail with the time 
 step "strata info" "$out/info.txt" "$strata" info
 note ""
 note '```'
-sed 's/^/    /' "$out/info.txt" | tee -a "$report" >/dev/null
+sed 's/^/    /' "$out/info.txt" | tee -a "$report"
 note '```'
 
 export STRATA_TEST_DEVICE="$device"
 for t in distributed render_frames; do
     step "tests/$t.rs (validation layer; every frame on each way to trace the device has)" "$out/test-$t.txt" \
         "$bin/$t" --test-threads 1
-    grep -E '^test result' "$out/test-$t.txt" | sed 's/^/  /' | tee -a "$report" >/dev/null
+    grep -E '^test result' "$out/test-$t.txt" | sed 's/^/  /' | tee -a "$report"
 done
 
 if [ "$quick" = 1 ]; then size=480x270 spp=16 bench=(--size 64x64 --spp 4); else size=1920x1080 spp=64 bench=(); fi
@@ -137,14 +137,14 @@ fi
 if [ -n "$reference" ]; then
     if python3 -c 'import numpy, PIL' 2>/dev/null; then
         step "showcase against $reference" "$out/compare.txt" python3 scripts/reference/compare_images.py "$showcase" "$reference"
-        sed 's/^/  /' "$out/compare.txt" | tee -a "$report" >/dev/null
+        sed 's/^/  /' "$out/compare.txt" | tee -a "$report"
     else
         note "- showcase against $reference: not compared (python3 lacks numpy or pillow)"
     fi
 fi
 
 step "strata bench (frame)" "$out/bench.txt" "$strata" bench --only frame "${bench[@]}" "${dev_args[@]}"
-grep -E 'pipeline creation|ways to trace|samples/s' "$out/bench.txt" | sed 's/^/  /' | tee -a "$report" >/dev/null
+grep -E 'pipeline creation|ways to trace|samples/s' "$out/bench.txt" | sed 's/^/  /' | tee -a "$report"
 
 note ""
 if [ ${#failed[@]} -eq 0 ]; then
