@@ -5,7 +5,8 @@
 //! names, decorations, types and variables are all this needs.
 use std::collections::HashMap;
 use std::mem::offset_of;
-use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord};
+use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord, ResolvePush};
+use strata::render::gbuffer_layout::{GBufferDraw, GBufferPush, GpuBump, GpuMaterial};
 
 const OP_NAME: u32 = 5;
 const OP_MEMBER_NAME: u32 = 6;
@@ -184,7 +185,22 @@ fn struct_offsets() -> Vec<(&'static str, Vec<(&'static str, usize)>)> {
         ),
         ("GpuPrimitiveRecord", record),
         ("GpuCamera", of!(GpuCamera; world_from_camera, lens, range)),
+        ("GpuMaterial", material_offsets()),
+        ("Bump", of!(GpuBump; kind, amplitude, frequency, octaves, lacunarity, gain, derivative, epsilon)),
     ]
+}
+
+fn material_offsets() -> Vec<(&'static str, usize)> {
+    macro_rules! of {
+        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
+    }
+    let mut v = of!(GpuMaterial; base_color, emissive, metallic, roughness, transmission, ior, normal_scale,
+        alpha_cutoff, alpha_mode, double_sided, base_color_texture, transmission_texture, normal_texture,
+        emissive_texture, base_color_uv_rows, bump, metallic_roughness_texture, specular_texture,
+        specular_color_texture, metallic_roughness_uv_rows, normal_uv_rows, emissive_uv_rows, transmission_uv_rows,
+        specular_color, specular_uv_rows, specular_color_uv_rows);
+    v.push(("pad0", offset_of!(GpuMaterial, pad)));
+    v
 }
 
 /// The differences between a module's struct and the Rust one: empty when they agree member for member.
@@ -308,4 +324,33 @@ fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
     for (name, index) in rust {
         assert_eq!(outputs.get(name).copied(), Some(index as u32), "{name}: {outputs:?}");
     }
+}
+
+/// The other passes' push constants and draw records: the G-buffer pass (both stages), the resolve pass.
+#[test]
+fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
+    macro_rules! of {
+        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
+    }
+    let gbuffer_push = of!(GBufferPush; clip_from_world, view_z_row);
+    let mut draw = of!(GBufferDraw; world_from_object, normal_rows, material, instance);
+    let pad = offset_of!(GBufferDraw, pad);
+    draw.extend([("pad0", pad), ("pad1", pad + 4)]);
+    // The Rust struct pads to 16 bytes past the GLSL block's last member.
+    let resolve = of!(ResolvePush; width, height, inv_samples, exposure_scale, tone_map);
+    let mut problems = Vec::new();
+    for (name, push, structs) in [
+        ("gbuffer.vert", gbuffer_push.clone(), vec![("GBufferDraw", draw.clone())]),
+        ("gbuffer.frag", gbuffer_push, vec![("GBufferDraw", draw), ("GpuMaterial", material_offsets())]),
+        ("resolve.comp", resolve, vec![]),
+    ] {
+        let m = module(name);
+        let block = m.push_constant_block().unwrap_or_else(|| panic!("{name} reads no push constants"));
+        problems.extend(compare(&m, block, &push).into_iter().map(|p| format!("{name} push constants: {p}")));
+        for (s, rust) in structs {
+            let id = m.struct_named(s).unwrap_or_else(|| panic!("{name} holds no {s}"));
+            problems.extend(compare(&m, id, &rust).into_iter().map(|p| format!("{name} {s}.{p}")));
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
