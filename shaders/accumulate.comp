@@ -18,7 +18,7 @@
 #include "trace_query.glsl"
 #include "path_tracer.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+layout(local_size_x = ACCUMULATE_TILE_SIZE, local_size_y = ACCUMULATE_TILE_SIZE) in;
 const uint GROUP_SIZE = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
 
 // The workgroup's chain rays, packed: lavapipe runs 8 lanes in lockstep, so chains scattered over the

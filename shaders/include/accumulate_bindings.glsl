@@ -3,6 +3,7 @@
 // src/render/accumulate.rs. Include after accumulate_layout.glsl and gbuffer_layout.glsl.
 #ifndef ACCUMULATE_BINDINGS_GLSL
 #define ACCUMULATE_BINDINGS_GLSL
+#include "shared_constants.glsl"
 // 1: trace each pixel's own primary ray instead of reading the G-buffer (a specialization constant, so each
 // pipeline holds only its own path).
 layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
@@ -13,17 +14,17 @@ layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
 // alpha test is never reached.
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
 
-layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
+layout(set = 0, binding = ACCUMULATE_BINDING_TLAS) uniform accelerationStructureEXT tlas;
 // Every attachment but the ids, at its GBUFFER_* index (gbuffer_layout.glsl).
-layout(set = 0, binding = 1) uniform sampler2D gbuffer[GBUFFER_IDS];
-layout(set = 0, binding = 2) uniform usampler2D gbuffer_ids;
-layout(set = 0, binding = 3, rgba32f) uniform image2D accumulation;
-layout(set = 0, binding = 4, std430) readonly buffer Materials { GpuMaterial materials[]; };
-layout(set = 0, binding = 5, std430) readonly buffer Lights { GpuLight lights[]; };
-layout(set = 0, binding = 6, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
-layout(set = 0, binding = 7) uniform sampler2D textures[];
-layout(set = 0, binding = 8, std430) buffer Counters { uint counters[]; };
-layout(set = 0, binding = 9, std430) readonly buffer Cameras { GpuCamera cameras[]; };
+layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_IDS];
+layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER_IDS) uniform usampler2D gbuffer_ids;
+layout(set = 0, binding = ACCUMULATE_BINDING_ACCUMULATION, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = ACCUMULATE_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
+layout(set = 0, binding = ACCUMULATE_BINDING_LIGHTS, std430) readonly buffer Lights { GpuLight lights[]; };
+layout(set = 0, binding = ACCUMULATE_BINDING_PRIMITIVES, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
+layout(set = 0, binding = ACCUMULATE_BINDING_TEXTURES) uniform sampler2D textures[];
+layout(set = 0, binding = ACCUMULATE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
+layout(set = 0, binding = ACCUMULATE_BINDING_CAMERAS, std430) readonly buffer Cameras { GpuCamera cameras[]; };
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec3Array { vec3 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };

@@ -43,11 +43,8 @@ struct GpuCamera {
     vec4 range;  // x near, y far, z 1 orthographic
 };
 
-// Counters per sample slot (binding 8): rays cast, and the next tile to shade (COUNTERS_PER_SLOT in Rust).
-const uint COUNTER_SHADOW_RAYS = 0u;
-const uint COUNTER_SECONDARY_RAYS = 1u;
-const uint COUNTER_NEXT_TILE = 2u;
-const uint COUNTERS_PER_SLOT = 3u;
+// Counters per sample slot (binding 8): shared_constants.glsl.
+#include "shared_constants.glsl"
 
 layout(push_constant, std430) uniform AccumulatePush {
     vec4 eye;          // w: 1 orthographic

@@ -7,7 +7,7 @@
 //! hit shaders that only record the hit and run the alpha test), for devices without ray queries.
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
-use super::gbuffer_layout::{ATTACHMENTS, IDS};
+use super::gbuffer_layout::IDS;
 use super::textures::GpuTextures;
 use crate::scene::settings::Trace;
 use crate::shaders;
@@ -22,7 +22,8 @@ use anyhow::{bail, Result};
 use ash::vk;
 use std::sync::Arc;
 
-const LOCAL_SIZE: u32 = 8;
+/// One tile of the compute shader's queue is one workgroup of LOCAL_SIZE × LOCAL_SIZE invocations.
+const LOCAL_SIZE: u32 = crate::shaders::constants::ACCUMULATE_TILE_SIZE;
 
 /// How the pass traces its rays on a device (`Trace` resolved).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -173,22 +174,24 @@ impl AccumulatePass {
     /// The pass's descriptor bindings, as `shaders/include/accumulate_bindings.glsl` declares them (every stage
     /// of both ways to trace reads the one set; tests/contracts.rs holds the SPIR-V to this list).
     pub fn bindings(texture_count: u32) -> Vec<Binding> {
+        use crate::shaders::constants::*;
+        use vk::DescriptorType as D;
         vec![
-            Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
-            // Every G-buffer attachment but the ids, which binding 2 reads as unsigned integers.
+            Binding::new(ACCUMULATE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
+            // Every G-buffer attachment but the ids, which the next binding reads as unsigned integers.
+            Binding { binding: ACCUMULATE_BINDING_GBUFFER, kind: D::COMBINED_IMAGE_SAMPLER, count: IDS as u32 },
+            Binding::new(ACCUMULATE_BINDING_GBUFFER_IDS, D::COMBINED_IMAGE_SAMPLER),
+            Binding::new(ACCUMULATE_BINDING_ACCUMULATION, D::STORAGE_IMAGE),
+            Binding::new(ACCUMULATE_BINDING_MATERIALS, D::STORAGE_BUFFER),
+            Binding::new(ACCUMULATE_BINDING_LIGHTS, D::STORAGE_BUFFER),
+            Binding::new(ACCUMULATE_BINDING_PRIMITIVES, D::STORAGE_BUFFER),
             Binding {
-                binding: 1,
-                kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                count: ATTACHMENTS.len() as u32 - 1,
+                binding: ACCUMULATE_BINDING_TEXTURES,
+                kind: D::COMBINED_IMAGE_SAMPLER,
+                count: texture_count.max(1),
             },
-            Binding::new(2, vk::DescriptorType::COMBINED_IMAGE_SAMPLER),
-            Binding::new(3, vk::DescriptorType::STORAGE_IMAGE),
-            Binding::new(4, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(5, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(6, vk::DescriptorType::STORAGE_BUFFER),
-            Binding { binding: 7, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
-            Binding::new(8, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(9, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(ACCUMULATE_BINDING_COUNTERS, D::STORAGE_BUFFER),
+            Binding::new(ACCUMULATE_BINDING_CAMERAS, D::STORAGE_BUFFER),
         ]
     }
 
@@ -215,6 +218,7 @@ impl AccumulatePass {
 
     /// The descriptor set for one frame: every binding stays the same across its samples.
     pub fn descriptor_set(&self, inputs: &AccumulateInputs<'_>) -> Result<DescriptorSet> {
+        use crate::shaders::constants::*;
         let set = self.pipeline().new_descriptor_set("accumulate set")?;
         let gbuffer: Vec<(vk::ImageView, vk::Sampler)> = inputs
             .gbuffer
@@ -224,16 +228,19 @@ impl AccumulatePass {
             .filter(|(i, _)| *i != IDS)
             .map(|(_, image)| (image.view, self.gbuffer_sampler.raw))
             .collect();
-        set.acceleration_structure(0, inputs.tlas.raw)
-            .combined_image_samplers(1, &gbuffer)
-            .combined_image_samplers(2, &[(inputs.gbuffer.color[IDS].view, self.gbuffer_sampler.raw)])
-            .storage_image(3, inputs.accumulation)
-            .storage_buffer(4, &inputs.materials.buffer)
-            .storage_buffer(5, inputs.lights)
-            .storage_buffer(6, inputs.primitives)
-            .combined_image_samplers(7, &inputs.textures.bindings())
-            .storage_buffer(8, inputs.counters)
-            .storage_buffer(9, inputs.cameras);
+        set.acceleration_structure(ACCUMULATE_BINDING_TLAS, inputs.tlas.raw)
+            .combined_image_samplers(ACCUMULATE_BINDING_GBUFFER, &gbuffer)
+            .combined_image_samplers(
+                ACCUMULATE_BINDING_GBUFFER_IDS,
+                &[(inputs.gbuffer.color[IDS].view, self.gbuffer_sampler.raw)],
+            )
+            .storage_image(ACCUMULATE_BINDING_ACCUMULATION, inputs.accumulation)
+            .storage_buffer(ACCUMULATE_BINDING_MATERIALS, &inputs.materials.buffer)
+            .storage_buffer(ACCUMULATE_BINDING_LIGHTS, inputs.lights)
+            .storage_buffer(ACCUMULATE_BINDING_PRIMITIVES, inputs.primitives)
+            .combined_image_samplers(ACCUMULATE_BINDING_TEXTURES, &inputs.textures.bindings())
+            .storage_buffer(ACCUMULATE_BINDING_COUNTERS, inputs.counters)
+            .storage_buffer(ACCUMULATE_BINDING_CAMERAS, inputs.cameras);
         Ok(set)
     }
 

@@ -3,7 +3,9 @@
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
 use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass, TracePath};
-use super::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT};
+use super::accumulate_layout::{
+    AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT, COUNTER_SECONDARY_RAYS, COUNTER_SHADOW_RAYS,
+};
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::lights::LightSet;
 use super::ray_scene::RayScene;
@@ -415,8 +417,8 @@ pub fn render_frame(
         })?;
         let counts: Vec<u32> = counters.read()?;
         for slot in 0..count as usize {
-            shadow_rays += u64::from(counts[slot * COUNTERS_PER_SLOT]);
-            secondary_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + 1]);
+            shadow_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + COUNTER_SHADOW_RAYS]);
+            secondary_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + COUNTER_SECONDARY_RAYS]);
         }
         if let Some(timer) = &timer {
             let ns = timer.read_range_ns(0, count * TIMESTAMPS_PER_SAMPLE)?;
