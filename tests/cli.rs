@@ -494,7 +494,8 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
         for mode in ["raster", "rays"] {
             let line = find(&format!("ways to trace, --primary {mode}:"));
             assert!(number_after(line, "query") > 0.0 && number_after(line, "pipeline") > 0.0, "{line}");
-            assert!(number_after(line, "pipeline/query") > 0.0, "{line}");
+            // A ratio, printed to two places: on a loaded machine one frame's figure can dwarf the other's.
+            assert!(number_after(line, "pipeline/query").is_finite(), "{line}");
         }
     }
     let creation = text.lines().find(|l| l.starts_with("accumulate pipeline creation")).expect("a creation line");
