@@ -144,7 +144,7 @@ if [ -n "$reference" ]; then
 fi
 
 step "strata bench (frame)" "$out/bench.txt" "$strata" bench --only frame "${bench[@]}" "${dev_args[@]}"
-grep -E 'pipeline creation|ways to trace|samples/s' "$out/bench.txt" | sed 's/^/  /' | tee -a "$report"
+grep -E '^scenes/|pipeline creation|ways to trace|samples/s' "$out/bench.txt" | sed 's/^/  /' | tee -a "$report"
 
 note ""
 if [ ${#failed[@]} -eq 0 ]; then
