@@ -158,11 +158,13 @@ fn module(name: &str) -> Module {
     parse(&ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap())
 }
 
+/// `(field name, offset)` of each named field of a Rust struct: GLSL spells its members the same way.
+macro_rules! of {
+    ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
+}
+
 /// Member name (as GLSL spells it) → offset in the Rust struct.
 fn push_offsets() -> Vec<(&'static str, usize)> {
-    macro_rules! of {
-        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
-    }
     let mut v = of!(AccumulatePush; eye, forward, background, width, height, sample_index, sample_count, sampler_kind,
         seed, light_offset, light_count, analytic_light_count, counter_slot, max_depth, total_light_power, ray_log,
         indirect, direct_light, alpha_moment);
@@ -172,9 +174,6 @@ fn push_offsets() -> Vec<(&'static str, usize)> {
 }
 
 fn struct_offsets() -> Vec<(&'static str, Vec<(&'static str, usize)>)> {
-    macro_rules! of {
-        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
-    }
     let mut record = of!(GpuPrimitiveRecord; positions, normals, uvs, indices, colors, dpdu, dpdv, material, uvs1);
     record.push(("pad0", offset_of!(GpuPrimitiveRecord, pad)));
     vec![
@@ -191,9 +190,6 @@ fn struct_offsets() -> Vec<(&'static str, Vec<(&'static str, usize)>)> {
 }
 
 fn material_offsets() -> Vec<(&'static str, usize)> {
-    macro_rules! of {
-        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
-    }
     let mut v = of!(GpuMaterial; base_color, emissive, metallic, roughness, transmission, ior, normal_scale,
         alpha_cutoff, alpha_mode, double_sided, base_color_texture, transmission_texture, normal_texture,
         emissive_texture, base_color_uv_rows, bump, metallic_roughness_texture, specular_texture,
@@ -329,9 +325,6 @@ fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
 /// The other passes' push constants and draw records: the G-buffer pass (both stages), the resolve pass.
 #[test]
 fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
-    macro_rules! of {
-        ($t:ty; $($f:ident),*) => { vec![$((stringify!($f), offset_of!($t, $f))),*] };
-    }
     let gbuffer_push = of!(GBufferPush; clip_from_world, view_z_row);
     let mut draw = of!(GBufferDraw; world_from_object, normal_rows, material, instance);
     let pad = offset_of!(GBufferDraw, pad);

@@ -18,7 +18,7 @@ use crate::vk::pipeline::{Binding, Pipeline, RayTracingDesc};
 use crate::vk::sampler::{Sampler, SamplerDesc};
 use crate::vk::shader_binding_table::ShaderBindingTable;
 use crate::vk::{Buffer, Device, Image};
-use anyhow::{bail, Result};
+use anyhow::{anyhow, Result};
 use ash::vk;
 use std::sync::Arc;
 
@@ -50,9 +50,11 @@ impl TracePath {
         match trace {
             Trace::Query => device.require_ray_queries("--trace query").map(|_| TracePath::Query),
             Trace::Pipeline => device.require_ray_tracing_pipelines("--trace pipeline").map(|_| TracePath::Pipeline),
-            Trace::Auto if report.ray_query => Ok(TracePath::Query),
-            Trace::Auto if device.ray_tracing.is_some() => Ok(TracePath::Pipeline),
-            Trace::Auto => bail!("{} can trace rays neither way: {}", report.name, report.status()),
+            // `available` lists ray queries first: the one place auto's preference is written.
+            Trace::Auto => Self::available(device)
+                .first()
+                .copied()
+                .ok_or_else(|| anyhow!("{} can trace rays neither way: {}", report.name, report.status())),
         }
     }
 
@@ -88,7 +90,12 @@ impl TracePath {
 /// The pass's pipeline: a compute pipeline, or a ray-tracing pipeline and its shader binding table.
 enum Tracer {
     Query(Pipeline),
-    Pipeline { pipeline: Pipeline, table: Box<ShaderBindingTable> },
+    Pipeline {
+        pipeline: Pipeline,
+        table: Box<ShaderBindingTable>,
+        /// The device's ray-tracing commands (`vkCmdTraceRaysKHR`).
+        commands: ash::khr::ray_tracing_pipeline::Device,
+    },
 }
 
 pub struct AccumulatePass {
@@ -154,7 +161,8 @@ impl AccumulatePass {
                     },
                 )?;
                 let table = Box::new(ShaderBindingTable::new(device, &pipeline, table_shift)?);
-                Tracer::Pipeline { pipeline, table }
+                let commands = device.require_ray_tracing_pipelines("the accumulation pass")?.loader.clone();
+                Tracer::Pipeline { pipeline, table, commands }
             }
         };
         let gbuffer_sampler = Sampler::new(
@@ -261,12 +269,11 @@ impl AccumulatePass {
                     unsafe { device.raw.cmd_dispatch(cmd, groups, 1, 1) };
                 });
             }
-            Tracer::Pipeline { pipeline, table } => {
-                let Some(rt) = device.ray_tracing.as_ref() else { return };
+            Tracer::Pipeline { pipeline, table, commands } => {
                 labelled(device, cmd, "accumulate pass (ray-tracing pipeline)", || {
                     pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
                     unsafe {
-                        rt.loader.cmd_trace_rays(
+                        commands.cmd_trace_rays(
                             cmd,
                             &table.raygen,
                             &table.miss,
