@@ -1,11 +1,13 @@
 #version 460
-// G-buffer pass: material evaluation and Blinn bump mapping (Blinn 1978) of the shading normal with a Perlin
-// height field (Perlin 1985, 2002), evaluated procedurally here.
+// G-buffer pass: the material and the Blinn bump-mapped shading normal (Blinn 1978) with a Perlin height field
+// (Perlin 1985, 2002), evaluated procedurally by material.glsl, the evaluation ray hits share; then packed into
+// the attachments (gbuffer_layout.glsl).
 #extension GL_EXT_nonuniform_qualifier : require
 #extension GL_EXT_scalar_block_layout : require
 #include "gbuffer_layout.glsl"
+#include "material.glsl"
 
-layout(set = 0, binding = 2) uniform sampler2D textures[];
+layout(set = 0, binding = GBUFFER_BINDING_TEXTURES) uniform sampler2D textures[];
 
 layout(location = 0) in vec3 in_world_position;
 layout(location = 1) in vec3 in_world_normal;
@@ -25,16 +27,14 @@ layout(location = GBUFFER_EMISSION) out vec4 out_emission;
 layout(location = GBUFFER_SPECULAR_COLOR) out vec4 out_specular_color;
 layout(location = GBUFFER_IDS) out uvec2 out_ids;
 
+// The fragment reads material textures by its implicit derivatives (material.glsl's contract).
+vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
+    return texture(textures[nonuniformEXT(index)], uv);
+}
+
 void main() {
     GBufferDraw d = draws[in_draw];
     GpuMaterial m = materials[d.material];
-
-    vec4 base = m.base_color * in_color;
-    if (m.base_color_texture >= 0) {
-        base *= texture(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, in_uv, in_uv1));
-    }
-    // MASK discards below the cutoff; BLEND is drawn as coverage at 0.5 (no order-independent transparency).
-    if ((m.alpha_mode == 1 && base.a < m.alpha_cutoff) || (m.alpha_mode == 2 && base.a < 0.5)) discard;
 
     // The face normal from screen-space derivatives, turned to the interpolated normal's side.
     vec3 face = cross(dFdx(in_world_position), dFdy(in_world_position));
@@ -45,20 +45,10 @@ void main() {
     if (n_len > 0.0 && dot(geometric, n) < 0.0) geometric = -geometric;
     if (!(n_len > 0.0)) n = geometric;
 
-    if (m.normal_texture >= 0) {
-        vec3 texel = texture(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, in_uv)).xyz;
-        vec3 dpdu = in_dpdu;
-        vec3 dpdv = in_dpdv;
-        transform_derivatives(m.normal_uv_rows, dpdu, dpdv);
-        n = normal_from_texture(n, dpdu, dpdv, texel, m.normal_scale);
-    }
-    float height = 0.0;
-    vec3 shading = normalize(n);
-    if (m.bump.kind != BUMP_NONE) {
-        vec3 h = bump_height_and_gradient(m.bump, in_uv);
-        height = h.x;
-        shading = bump_perturb_normal(n, in_dpdu, in_dpdv, h.yz);
-    }
+    MaterialPoint p = evaluate_material(m, in_color, in_uv, in_uv1, n, in_dpdu, in_dpdv, vec2(0.0), true);
+    if (!alpha_test_passes(m, p.base.a)) discard;
+    // Without a bump the normal (interpolated, or tilted by a normal texture) still needs its unit length.
+    vec3 shading = m.bump.kind != BUMP_NONE ? p.normal : normalize(p.normal);
     // Double-sided faces seen from behind: the same surface, so its normals flip toward the viewer.
     if (!gl_FrontFacing && m.double_sided != 0) {
         shading = -shading;
@@ -66,36 +56,13 @@ void main() {
     }
 
     out_position = vec4(in_world_position, -dot(pc.view_z_row, vec4(in_world_position, 1.0)));
-    out_shading_normal = vec4(shading, height);
+    out_shading_normal = vec4(shading, p.height);
     // The specular factor rides in the geometric normal's spare channel (16-bit float).
-    float specular = m.emissive.w;
-    if (m.specular_texture >= 0) {
-        specular *= texture(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, in_uv, in_uv1)).a;
-    }
-    out_geometric_normal = vec4(geometric, specular);
-    out_albedo = base;
-    // Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); ray hits do the same (accumulate.comp).
-    vec2 metallic_roughness = vec2(m.metallic, m.roughness);  // metalness in B, roughness in G
-    if (m.metallic_roughness_texture >= 0) {
-        metallic_roughness *= texture(textures[nonuniformEXT(m.metallic_roughness_texture)],
-                                      texture_uv(m.metallic_roughness_uv_rows, in_uv, in_uv1)).bg;
-    }
-    vec3 emission = m.emissive.rgb;
-    if (m.emissive_texture >= 0) {
-        emission *= texture(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, in_uv, in_uv1)).rgb;
-    }
-    float transmission = m.transmission;
-    if (m.transmission_texture >= 0) {
-        transmission *=
-            texture(textures[nonuniformEXT(m.transmission_texture)], texture_uv(m.transmission_uv_rows, in_uv, in_uv1)).r;
-    }
-    out_material = vec4(metallic_roughness, transmission, pack_ior(m.ior));
-    out_emission = vec4(emission, 0.0);
+    out_geometric_normal = vec4(geometric, p.shading.specular);
+    out_albedo = p.base;
+    out_material = vec4(p.shading.metallic, p.shading.roughness, p.shading.transmission, pack_ior(p.shading.ior));
+    out_emission = vec4(p.emission, 0.0);
     // The texel alone: the factor may exceed 1, beyond what this 8-bit sRGB attachment holds.
-    out_specular_color = vec4(1.0);
-    if (m.specular_color_texture >= 0) {
-        out_specular_color.rgb = texture(textures[nonuniformEXT(m.specular_color_texture)],
-                                         texture_uv(m.specular_color_uv_rows, in_uv, in_uv1)).rgb;
-    }
+    out_specular_color = vec4(p.specular_color_texel, 1.0);
     out_ids = uvec2(d.instance + 1u, d.material);
 }

@@ -3,6 +3,7 @@
 // accumulate_bindings.glsl.
 #ifndef HIT_GEOMETRY_GLSL
 #define HIT_GEOMETRY_GLSL
+#include "material.glsl"
 // A triangle a ray met: its primitive record, vertex indices and barycentric weights.
 struct TriangleHit {
     GpuPrimitiveRecord r;
@@ -74,15 +75,20 @@ vec4 hit_color(TriangleHit h) {
     return h.w.x * colors.v[h.i0] + h.w.y * colors.v[h.i1] + h.w.z * colors.v[h.i2];
 }
 
-// Whether an alpha-tested material covers a point with this vertex colour alpha and these UVs: the rule of
-// gbuffer.frag's discard (base colour × vertex colour × texture alpha against the MASK cutoff, or 0.5 for BLEND),
-// the texture read at level of detail `lod`.
+// Ray hits read material textures at the level of detail of the ray's cone (material.glsl's contract).
+vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
+    return textureLod(textures[nonuniformEXT(index)], uv, texture_lod(rows, footprint_lod));
+}
+
+// Whether an alpha-tested material covers a point with this vertex colour alpha and these UVs: base colour ×
+// vertex colour × texture alpha under the one alpha test (alpha_test_passes, as gbuffer.frag discards), the
+// texture read at level of detail `lod`.
 bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1, float lod) {
     float alpha = m.base_color.a * vertex_alpha;
     if (m.base_color_texture >= 0) {
         alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv0, uv1), lod).a;
     }
-    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+    return alpha_test_passes(m, alpha);
 }
 
 // Whether a candidate triangle of alpha-tested geometry covers its point, its texture read through the ray's cone

@@ -192,9 +192,8 @@ Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
     return s;
 }
 
-// The surface a ray hit, from the primitive's vertex streams, evaluated as the G-buffer pass does
-// (gbuffer.frag): vertex colour, normal texture and Blinn bump, so a surface looks the same seen directly, in a
-// mirror or through glass. `visible` (a primary ray of the reference mode) also turns double-sided faces to the
+// The surface a ray hit, from the primitive's vertex streams, its material evaluated by the one evaluation the
+// G-buffer pass uses too (material.glsl), so a surface looks the same seen directly, in a mirror or through glass. `visible` (a primary ray of the reference mode) also turns double-sided faces to the
 // viewer, as the raster pass does; deeper hits keep their side, so a ray inside a double-sided transmissive mesh
 // still knows it is inside.
 Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
@@ -223,70 +222,26 @@ Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
 
     GpuMaterial m = materials[h.r.material];
     vec3 uv1_area = any_texture_reads_uv1(m) ? hit_uv_and_area(h.r.uvs1, h) : uv_area;
-    vec2 uv1 = uv1_area.xy;
     // The cone's footprint in each UV set; texture_lod adds each texture's own density.
     vec2 lod = vec2(footprint_lod(cone_width, ng, v, uv_area.z), footprint_lod(cone_width, ng, v, uv1_area.z));
-    vec4 base = m.base_color * hit_color(h);
-    if (m.base_color_texture >= 0) {
-        base *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv, uv1),
-                           texture_lod(m.base_color_uv_rows, lod));
-    }
+    vec3 dpdu = vec3(0.0);
+    vec3 dpdv = vec3(0.0);
     if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
         Vec3Array dpdus = Vec3Array(h.r.dpdu);
         Vec3Array dpdvs = Vec3Array(h.r.dpdv);
-        vec3 dpdu = m3 * (h.w.x * dpdus.v[h.i0] + h.w.y * dpdus.v[h.i1] + h.w.z * dpdus.v[h.i2]);
-        vec3 dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
-        vec3 n = s.normal;
-        if (m.normal_texture >= 0) {
-            vec3 texel = textureLod(textures[nonuniformEXT(m.normal_texture)], transform_uv(m.normal_uv_rows, uv),
-                                    texture_lod(m.normal_uv_rows, lod)).xyz;
-            vec3 map_dpdu = dpdu;
-            vec3 map_dpdv = dpdv;
-            transform_derivatives(m.normal_uv_rows, map_dpdu, map_dpdv);
-            n = normal_from_texture(n, map_dpdu, map_dpdv, texel, m.normal_scale);
-        }
-        if (m.bump.kind != BUMP_NONE) n = bump_perturb_normal(n, dpdu, dpdv, bump_gradient(m.bump, uv));
-        s.normal = n;
+        dpdu = m3 * (h.w.x * dpdus.v[h.i0] + h.w.y * dpdus.v[h.i1] + h.w.z * dpdus.v[h.i2]);
+        dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
     }
+    MaterialPoint mp = evaluate_material(m, hit_color(h), uv, uv1_area.xy, s.normal, dpdu, dpdv, lod, false);
+    s.normal = mp.normal;
     // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
     if (visible && m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
         s.normal = -s.normal;
         s.geometric = -s.geometric;
     }
-    s.emission = m.emissive.rgb;
-    if (m.emissive_texture >= 0) {
-        s.emission *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv, uv1),
-                                 texture_lod(m.emissive_uv_rows, lod)).rgb;
-    }
-    s.m.albedo = base.rgb;
-    // Metalness in B, roughness in G (glTF 2.0 §3.9.2), as gbuffer.frag reads them.
-    vec2 metallic_roughness = vec2(m.metallic, m.roughness);
-    if (m.metallic_roughness_texture >= 0) {
-        metallic_roughness *= textureLod(textures[nonuniformEXT(m.metallic_roughness_texture)],
-                                         texture_uv(m.metallic_roughness_uv_rows, uv, uv1),
-                                         texture_lod(m.metallic_roughness_uv_rows, lod)).bg;
-    }
-    s.m.metallic = metallic_roughness.x;
-    s.m.roughness = metallic_roughness.y;
-    s.m.transmission = m.transmission;
-    if (m.transmission_texture >= 0) {
-        s.m.transmission *= textureLod(textures[nonuniformEXT(m.transmission_texture)],
-                                       texture_uv(m.transmission_uv_rows, uv, uv1),
-                                       texture_lod(m.transmission_uv_rows, lod)).r;
-    }
-    s.m.ior = m.ior;
-    s.m.specular = m.emissive.w;
-    if (m.specular_texture >= 0) {
-        s.m.specular *= textureLod(textures[nonuniformEXT(m.specular_texture)], texture_uv(m.specular_uv_rows, uv, uv1),
-                                   texture_lod(m.specular_uv_rows, lod)).a;
-    }
-    s.m.specular_color = m.specular_color.rgb;
-    if (m.specular_color_texture >= 0) {
-        s.m.specular_color *= textureLod(textures[nonuniformEXT(m.specular_color_texture)],
-                                         texture_uv(m.specular_color_uv_rows, uv, uv1),
-                                         texture_lod(m.specular_color_uv_rows, lod)).rgb;
-    }
+    s.emission = mp.emission;
+    s.m = mp.shading;
     face_viewer(s, v, m);
     return s;
 }

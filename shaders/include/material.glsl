@@ -1,0 +1,105 @@
+// The one material evaluation: what a glTF metallic-roughness material (glTF 2.0 §3.9, with
+// KHR_materials_transmission, _ior, _specular and KHR_texture_transform) and its Blinn bump (Blinn 1978) make of a
+// surface point. The G-buffer pass (gbuffer.frag) and every ray hit (path_tracer.glsl's hit_surface) call it, so a
+// surface looks the same seen directly, in a mirror or through glass.
+//
+// The two callers read textures differently, so each defines, before including this file,
+//   vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod);
+// the fragment shader by its implicit derivatives (texture), ray hits at the level of detail of the ray's cone
+// (textureLod at texture_lod(rows, footprint_lod)). Include after gbuffer_layout.glsl.
+#ifndef MATERIAL_GLSL
+#define MATERIAL_GLSL
+#include "brdf.glsl"
+
+vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod);
+
+// The alpha test of glTF's alpha modes: MASK keeps what reaches the cutoff; BLEND is drawn as coverage at 0.5
+// (no order-independent transparency). Opaque materials pass.
+bool alpha_test_passes(GpuMaterial m, float alpha) {
+    if (m.alpha_mode == 0) return true;
+    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+}
+
+// A material at one surface point.
+struct MaterialPoint {
+    vec4 base;                 // base colour × vertex colour × texture; a: alpha
+    vec3 normal;               // after the normal texture and the bump; normalized only where either applied
+    float height;              // the bump height B(u, v) (only where asked for: evaluate_material's with_height)
+    vec3 emission;             // emissive factor × texture
+    vec3 specular_color_texel;  // the specular colour texture's RGB alone (white without one)
+    Shading shading;           // what the BRDF reads (brdf.glsl); its specular colour is factor × texel
+};
+
+// Evaluates material `m` at a point with vertex colour `vertex_color`, coordinates uv0 (TEXCOORD_0) and uv1,
+// normal `n` (world space, on the geometry's own side) and surface derivatives dpdu, dpdv (world space, with
+// respect to TEXCOORD_0). Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); the normal texture tilts n
+// in the tangent frame of dpdu, dpdv through its transform, then the bump perturbs it (DESIGN.md, "Blinn bump
+// mapping"). `with_height`: also evaluate the height itself (the G-buffer stores it; ray hits skip it).
+MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2 uv1, vec3 n, vec3 dpdu, vec3 dpdv,
+                                vec2 footprint_lod, const bool with_height) {
+    MaterialPoint p;
+    p.base = m.base_color * vertex_color;
+    if (m.base_color_texture >= 0) {
+        p.base *= material_texture(m.base_color_texture, texture_uv(m.base_color_uv_rows, uv0, uv1),
+                                   m.base_color_uv_rows, footprint_lod);
+    }
+
+    if (m.normal_texture >= 0) {
+        // Normal textures read TEXCOORD_0 (a warning at load says so of any that name TEXCOORD_1).
+        vec3 texel = material_texture(m.normal_texture, transform_uv(m.normal_uv_rows, uv0), m.normal_uv_rows,
+                                      footprint_lod).xyz;
+        vec3 map_dpdu = dpdu;
+        vec3 map_dpdv = dpdv;
+        transform_derivatives(m.normal_uv_rows, map_dpdu, map_dpdv);
+        n = normal_from_texture(n, map_dpdu, map_dpdv, texel, m.normal_scale);
+    }
+    p.height = 0.0;
+    if (m.bump.kind != BUMP_NONE) {
+        vec2 gradient;
+        if (with_height) {
+            vec3 h = bump_height_and_gradient(m.bump, uv0);
+            p.height = h.x;
+            gradient = h.yz;
+        } else {
+            gradient = bump_gradient(m.bump, uv0);
+        }
+        n = bump_perturb_normal(n, dpdu, dpdv, gradient);
+    }
+    p.normal = n;
+
+    p.emission = m.emissive.rgb;
+    if (m.emissive_texture >= 0) {
+        p.emission *= material_texture(m.emissive_texture, texture_uv(m.emissive_uv_rows, uv0, uv1),
+                                       m.emissive_uv_rows, footprint_lod).rgb;
+    }
+    p.shading.albedo = p.base.rgb;
+    // Metalness in B, roughness in G (glTF 2.0 §3.9.2).
+    vec2 metallic_roughness = vec2(m.metallic, m.roughness);
+    if (m.metallic_roughness_texture >= 0) {
+        metallic_roughness *= material_texture(m.metallic_roughness_texture,
+                                               texture_uv(m.metallic_roughness_uv_rows, uv0, uv1),
+                                               m.metallic_roughness_uv_rows, footprint_lod).bg;
+    }
+    p.shading.metallic = metallic_roughness.x;
+    p.shading.roughness = metallic_roughness.y;
+    p.shading.transmission = m.transmission;
+    if (m.transmission_texture >= 0) {
+        p.shading.transmission *= material_texture(m.transmission_texture, texture_uv(m.transmission_uv_rows, uv0, uv1),
+                                                   m.transmission_uv_rows, footprint_lod).r;
+    }
+    p.shading.ior = m.ior;
+    p.shading.specular = m.emissive.w;
+    if (m.specular_texture >= 0) {
+        p.shading.specular *= material_texture(m.specular_texture, texture_uv(m.specular_uv_rows, uv0, uv1),
+                                               m.specular_uv_rows, footprint_lod).a;
+    }
+    p.specular_color_texel = vec3(1.0);
+    if (m.specular_color_texture >= 0) {
+        p.specular_color_texel = material_texture(m.specular_color_texture,
+                                                  texture_uv(m.specular_color_uv_rows, uv0, uv1),
+                                                  m.specular_color_uv_rows, footprint_lod).rgb;
+    }
+    p.shading.specular_color = m.specular_color.rgb * p.specular_color_texel;
+    return p;
+}
+#endif
