@@ -3,13 +3,14 @@
 // GPU side of the noise twin test (src/math/noise.rs).
 #extension GL_EXT_scalar_block_layout : require
 #include "noise.glsl"
+#include "shared_constants.glsl"
 
-layout(local_size_x = 64) in;
+layout(local_size_x = PROBE_WORKGROUP_SIZE) in;
 
-layout(set = 0, binding = 0, scalar) readonly buffer Points { vec4 points[]; };
+layout(set = 0, binding = NOISE_PROBE_BINDING_POINTS, scalar) readonly buffer Points { vec4 points[]; };
 // Four results per point: noise, fBm, turbulence (value in w, gradient in xyz), then the three value-only
 // functions' results in xyz.
-layout(set = 0, binding = 1, scalar) writeonly buffer Results { vec4 results[]; };
+layout(set = 0, binding = NOISE_PROBE_BINDING_RESULTS, scalar) writeonly buffer Results { vec4 results[]; };
 layout(push_constant) uniform NoiseProbePush {
     uint count;
     uint octaves;

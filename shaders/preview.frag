@@ -5,7 +5,7 @@
 #extension GL_EXT_nonuniform_qualifier : require
 #include "preview_layout.glsl"
 
-layout(set = 0, binding = 1) uniform sampler2D textures[];
+layout(set = 0, binding = PREVIEW_BINDING_TEXTURES) uniform sampler2D textures[];
 
 layout(location = 0) in vec3 in_view_normal;
 layout(location = 1) in vec2 in_uv;

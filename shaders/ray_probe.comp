@@ -4,14 +4,16 @@
 #extension GL_EXT_ray_query : require
 #extension GL_EXT_scalar_block_layout : require
 
-layout(local_size_x = 64) in;
+#include "shared_constants.glsl"
+
+layout(local_size_x = PROBE_WORKGROUP_SIZE) in;
 
 struct ProbeRay { vec3 origin; float t_min; vec3 direction; float t_max; uint flags; };  // flags besides opaque
 struct ProbeHit { float t; int instance_custom_index; int instance_id; int primitive_id; };
 
-layout(set = 0, binding = 0) uniform accelerationStructureEXT tlas;
-layout(set = 0, binding = 1, scalar) readonly buffer Rays { ProbeRay rays[]; };
-layout(set = 0, binding = 2, scalar) writeonly buffer Hits { ProbeHit hits[]; };
+layout(set = 0, binding = RAY_PROBE_BINDING_TLAS) uniform accelerationStructureEXT tlas;
+layout(set = 0, binding = RAY_PROBE_BINDING_RAYS, scalar) readonly buffer Rays { ProbeRay rays[]; };
+layout(set = 0, binding = RAY_PROBE_BINDING_HITS, scalar) writeonly buffer Hits { ProbeHit hits[]; };
 layout(push_constant) uniform ProbePush { uint ray_count; } pc;
 
 void main() {

@@ -2,10 +2,12 @@
 // The resolve pass: the accumulated sum over N samples becomes the pixel estimate R = (1/N) Σ I (written back
 // in place as linear radiance, for EXR), then exposure, a tone map (clamp, or Narkowicz's 2015 fit of the ACES
 // filmic curve) and the sRGB encoding (IEC 61966-2-1) into an 8-bit image for PNG.
-layout(local_size_x = 8, local_size_y = 8) in;
+#include "shared_constants.glsl"
 
-layout(set = 0, binding = 0, rgba32f) uniform image2D accumulation;
-layout(set = 0, binding = 1, rgba8) uniform writeonly image2D display;
+layout(local_size_x = RESOLVE_TILE_SIZE, local_size_y = RESOLVE_TILE_SIZE) in;
+
+layout(set = 0, binding = RESOLVE_BINDING_ACCUMULATION, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = RESOLVE_BINDING_DISPLAY, rgba8) uniform writeonly image2D display;
 
 layout(push_constant, std430) uniform ResolvePush {
     uint width;

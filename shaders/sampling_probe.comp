@@ -3,9 +3,10 @@
 // the GPU side of the sampler twin test (src/math/sampling.rs).
 #extension GL_EXT_scalar_block_layout : require
 #include "sampling.glsl"
+#include "shared_constants.glsl"
 
-layout(local_size_x = 64) in;
-layout(set = 0, binding = 0, scalar) writeonly buffer Results { vec4 results[]; };
+layout(local_size_x = PROBE_WORKGROUP_SIZE) in;
+layout(set = 0, binding = SAMPLING_PROBE_BINDING_RESULTS, scalar) writeonly buffer Results { vec4 results[]; };
 layout(push_constant) uniform SamplingProbePush {
     uint kind;
     uint seed;

@@ -1,14 +1,22 @@
 //! The contracts between Rust and GLSL, read from the SPIR-V strata embeds: every member offset of the
-//! accumulation pass's push constants and of the structs its buffers hold, and every descriptor binding's number
-//! and type, against the Rust side (`render::accumulate_layout`, `AccumulatePass::bindings`). A change made on one
-//! side alone fails here. The SPIR-V is walked by hand (SPIR-V spec 2.3, "Physical Layout"; 3.32, instructions):
-//! names, decorations, types and variables are all this needs.
+//! accumulation pass's push constants and of the structs its buffers hold, the G-buffer and resolve passes' push
+//! constants and records, every pass's descriptor bindings (number and type) and every compute shader's
+//! workgroup size, against the Rust side (`render::accumulate_layout`, `render::gbuffer_layout`, each pass's
+//! `bindings()`, `strata::shaders::constants`). A change made on one side alone fails here. The SPIR-V is walked
+//! by hand (SPIR-V spec 2.3, "Physical Layout"; 3.32, instructions): names, decorations, types, constants,
+//! variables and execution modes are all this needs.
 use std::collections::HashMap;
 use std::mem::offset_of;
 use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord, ResolvePush};
 use strata::render::gbuffer_layout::{GBufferDraw, GBufferPush, GpuBump, GpuMaterial};
+use strata::vk::pipeline::Binding;
 
 const OP_NAME: u32 = 5;
+const OP_EXECUTION_MODE: u32 = 16;
+const OP_CONSTANT: u32 = 43;
+const OP_EXECUTION_MODE_ID: u32 = 331;
+const EXECUTION_MODE_LOCAL_SIZE: u32 = 17;
+const EXECUTION_MODE_LOCAL_SIZE_ID: u32 = 38;
 const OP_MEMBER_NAME: u32 = 6;
 const OP_TYPE_IMAGE: u32 = 25;
 const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
@@ -39,6 +47,12 @@ struct Module {
     types: HashMap<u32, (u32, Vec<u32>)>,
     /// (variable id, pointer type id, storage class).
     variables: Vec<(u32, u32, u32)>,
+    /// A compute shader's LocalSize execution mode, or the ids of its LocalSizeId (glslang's form when the size
+    /// is a named constant): resolved through `constants` by `workgroup_size`.
+    local_size: Option<[u32; 3]>,
+    local_size_ids: Option<[u32; 3]>,
+    /// 32-bit OpConstant values by result id.
+    constants: HashMap<u32, u32>,
 }
 
 fn string(words: &[u32]) -> String {
@@ -70,6 +84,13 @@ fn parse(words: &[u32]) -> Module {
                 m.member_offsets.insert((w[0], w[1]), w[3]);
             }
             OP_VARIABLE => m.variables.push((w[1], w[0], w[2])),
+            OP_EXECUTION_MODE if w[1] == EXECUTION_MODE_LOCAL_SIZE => m.local_size = Some([w[2], w[3], w[4]]),
+            OP_EXECUTION_MODE_ID if w[1] == EXECUTION_MODE_LOCAL_SIZE_ID => {
+                m.local_size_ids = Some([w[2], w[3], w[4]]);
+            }
+            OP_CONSTANT if w.len() == 3 => {
+                m.constants.insert(w[1], w[2]);
+            }
             OP_TYPE_IMAGE
             | OP_TYPE_SAMPLED_IMAGE
             | OP_TYPE_ARRAY
@@ -87,6 +108,11 @@ fn parse(words: &[u32]) -> Module {
 }
 
 impl Module {
+    /// A compute shader's workgroup size, however the module states it.
+    fn workgroup_size(&self) -> Option<[u32; 3]> {
+        self.local_size.or_else(|| self.local_size_ids.map(|ids| ids.map(|id| self.constants[&id])))
+    }
+
     /// The laid-out struct type named `name` (GLSL's struct or block name): glslang also emits an undecorated
     /// copy of a struct for local variables, which has no offsets.
     fn struct_named(&self, name: &str) -> Option<u32> {
@@ -233,9 +259,16 @@ fn check_module(m: &Module) -> Vec<String> {
             problems.extend(compare(m, id, &rust).into_iter().map(|p| format!("{name}.{p}")));
         }
     }
-    let rust_bindings = strata::render::accumulate::AccumulatePass::bindings(1);
+    problems.extend(binding_problems(m, &strata::render::accumulate::AccumulatePass::bindings(1)));
+    problems
+}
+
+/// The differences between the bindings a module declares and a pass's Rust list: each declared binding must be
+/// in the list with the descriptor type it needs.
+fn binding_problems(m: &Module, rust: &[Binding]) -> Vec<String> {
+    let mut problems = Vec::new();
     for (binding, (name, kind)) in m.descriptor_bindings() {
-        match rust_bindings.iter().find(|b| b.binding == binding) {
+        match rust.iter().find(|b| b.binding == binding) {
             Some(b) if b.kind == kind => {}
             Some(b) => problems.push(format!("binding {binding} ({name}): GLSL needs {kind:?}, Rust has {:?}", b.kind)),
             None => problems.push(format!("binding {binding} ({name}): in GLSL, not in Rust")),
@@ -346,4 +379,102 @@ fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// Every other pass's descriptor bindings and every compute shader's workgroup size, against the Rust lists
+/// (`bindings()` of each pass) and the sizes its dispatches divide by (`strata::shaders::constants`, read from
+/// the same `shared_constants.glsl` the shaders include). Each pass's stages together use every binding its list
+/// declares, so a binding dropped on the GLSL side alone is caught too.
+#[test]
+fn every_pass_declares_the_bindings_and_workgroup_size_the_rust_side_uses() {
+    use strata::render::{gbuffer::GBufferPass, noise_probe::NoiseProbe, preview::PreviewPass};
+    use strata::render::{ray_probe::RayProbe, resolve::ResolvePass};
+    use strata::shaders::constants::*;
+    let sampling_probe = vec![Binding::new(SAMPLING_PROBE_BINDING_RESULTS, ash::vk::DescriptorType::STORAGE_BUFFER)];
+    let probe = Some([PROBE_WORKGROUP_SIZE, 1, 1]);
+    let passes: [(&[&str], Vec<Binding>, WorkgroupSize); 7] = [
+        (&["gbuffer.vert", "gbuffer.frag"], GBufferPass::bindings(1), None),
+        (&["preview.vert", "preview.frag"], PreviewPass::bindings(1), None),
+        (&["resolve.comp"], ResolvePass::bindings(), Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1])),
+        (&["ray_probe.comp"], RayProbe::bindings(), probe),
+        (&["noise_probe.comp"], NoiseProbe::bindings(), probe),
+        (&["sampling_probe.comp"], sampling_probe, probe),
+        (
+            &["accumulate.comp"],
+            strata::render::accumulate::AccumulatePass::bindings(1),
+            Some([ACCUMULATE_TILE_SIZE, ACCUMULATE_TILE_SIZE, 1]),
+        ),
+    ];
+    let mut problems = Vec::new();
+    for (stages, rust, local_size) in passes {
+        let modules: Vec<(&str, Module)> = stages.iter().map(|name| (*name, module(name))).collect();
+        problems.extend(pass_problems(&modules, &rust, local_size));
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// A compute shader's workgroup size; None for graphics stages.
+type WorkgroupSize = Option<[u32; 3]>;
+
+/// The differences between one pass's stages and its Rust side: the bindings each stage declares, the bindings
+/// none declares, and each stage's workgroup size.
+fn pass_problems(stages: &[(&str, Module)], rust: &[Binding], local_size: WorkgroupSize) -> Vec<String> {
+    let mut problems = Vec::new();
+    let mut used = std::collections::HashSet::new();
+    for (name, m) in stages {
+        problems.extend(binding_problems(m, rust).into_iter().map(|p| format!("{name}: {p}")));
+        used.extend(m.descriptor_bindings().into_keys());
+        if m.workgroup_size() != local_size {
+            problems.push(format!("{name}: workgroup size {:?} in GLSL, {local_size:?} in Rust", m.workgroup_size()));
+        }
+    }
+    let names: Vec<&str> = stages.iter().map(|(name, _)| *name).collect();
+    for b in rust {
+        if !used.contains(&b.binding) {
+            problems.push(format!("{}: binding {} is in Rust, not in GLSL", names.join(" + "), b.binding));
+        }
+    }
+    problems
+}
+
+/// That check can fail: resolve.comp's SPIR-V with its workgroup widened and its display image renumbered is
+/// caught, naming both.
+#[test]
+fn a_workgroup_size_or_binding_changed_on_the_glsl_side_alone_is_caught() {
+    use strata::shaders::constants::*;
+    let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == "resolve.comp").unwrap();
+    let mut words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap();
+    let m = parse(&words);
+    let display = m.variables.iter().find(|v| m.names.get(&v.0).map(String::as_str) == Some("display")).unwrap().0;
+    let mut i = 5;
+    while i < words.len() {
+        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
+        let w = &mut words[i + 1..i + count];
+        // The size as a literal: what glslang writes for a number in the layout (LocalSizeId's ids become it).
+        if op == OP_EXECUTION_MODE_ID && w[1] == EXECUTION_MODE_LOCAL_SIZE_ID {
+            words[i] = (count as u32) << 16 | OP_EXECUTION_MODE;
+            let w = &mut words[i + 1..i + count];
+            w[1] = EXECUTION_MODE_LOCAL_SIZE;
+            w[2..5].copy_from_slice(&[16, RESOLVE_TILE_SIZE, 1]);
+            i += count;
+            continue;
+        }
+        if op == OP_DECORATE && w[0] == display && w[1] == DECORATION_BINDING {
+            w[2] = 5;
+        }
+        i += count;
+    }
+    let changed = [("resolve.comp", parse(&words))];
+    let problems = pass_problems(
+        &changed,
+        &strata::render::resolve::ResolvePass::bindings(),
+        Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1]),
+    )
+    .join("\n");
+    assert!(
+        problems.contains("resolve.comp: workgroup size Some([16, 8, 1]) in GLSL, Some([8, 8, 1]) in Rust"),
+        "{problems}"
+    );
+    assert!(problems.contains("resolve.comp: binding 5 (display): in GLSL, not in Rust"), "{problems}");
+    assert!(problems.contains("resolve.comp: binding 1 is in Rust, not in GLSL"), "{problems}");
 }

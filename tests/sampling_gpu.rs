@@ -6,6 +6,7 @@ use ash::vk;
 use glam::Vec4;
 use strata::math::sampling::{sample_1d, sample_2d};
 use strata::scene::settings::SamplerKind;
+use strata::shaders::constants::{PROBE_WORKGROUP_SIZE, SAMPLING_PROBE_BINDING_RESULTS};
 use strata::vk::commands::{buffer_barrier, submit_and_wait, Access};
 use strata::vk::pipeline::{Binding, Pipeline};
 use strata::vk::{Buffer, MemoryLocation};
@@ -27,7 +28,7 @@ fn gpu_samplers_equal_the_rust_twin() {
         device,
         "sampling probe",
         ("sampling_probe.comp", strata::shaders::SAMPLING_PROBE_COMP),
-        &[Binding::new(0, vk::DescriptorType::STORAGE_BUFFER)],
+        &[Binding::new(SAMPLING_PROBE_BINDING_RESULTS, vk::DescriptorType::STORAGE_BUFFER)],
         16,
     )
     .unwrap();
@@ -52,10 +53,10 @@ fn gpu_samplers_equal_the_rust_twin() {
             )
             .unwrap();
             let set = pipeline.new_descriptor_set("sampling probe set").unwrap();
-            set.storage_buffer(0, &output);
+            set.storage_buffer(SAMPLING_PROBE_BINDING_RESULTS, &output);
             submit_and_wait(device, "sampling probe", |cmd| {
                 pipeline.bind(cmd, Some(&set), bytemuck::bytes_of(&push));
-                unsafe { device.raw.cmd_dispatch(cmd, (total as u32).div_ceil(64), 1, 1) };
+                unsafe { device.raw.cmd_dispatch(cmd, (total as u32).div_ceil(PROBE_WORKGROUP_SIZE), 1, 1) };
                 buffer_barrier(device, cmd, &output, Access::COMPUTE_WRITE, Access::HOST_READ);
                 Ok(())
             })

@@ -2,6 +2,7 @@
 #ifndef GBUFFER_LAYOUT_GLSL
 #define GBUFFER_LAYOUT_GLSL
 #include "bump.glsl"
+#include "shared_constants.glsl"
 
 // Attachment locations, the one definition gbuffer.frag writes by and path_tracer.glsl reads by (Rust:
 // gbuffer_layout.rs, whose ATTACHMENTS gives the formats; tests/contracts.rs holds the two together):
@@ -122,8 +123,8 @@ vec3 normal_from_texture(vec3 n, vec3 dpdu, vec3 dpdv, vec3 texel, float scale) 
 }
 
 #ifndef GBUFFER_LAYOUT_STRUCTS_ONLY
-layout(set = 0, binding = 0, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
-layout(set = 0, binding = 1, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };
+layout(set = 0, binding = GBUFFER_BINDING_DRAWS, std430) readonly buffer GBufferDraws { GBufferDraw draws[]; };
+layout(set = 0, binding = GBUFFER_BINDING_MATERIALS, std430) readonly buffer GBufferMaterials { GpuMaterial materials[]; };
 
 layout(push_constant, std430) uniform GBufferPush {
     mat4 clip_from_world;

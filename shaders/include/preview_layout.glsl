@@ -2,6 +2,7 @@
 // Draw i reads draws[i], selected through firstInstance = i (gl_InstanceIndex).
 #ifndef PREVIEW_LAYOUT_GLSL
 #define PREVIEW_LAYOUT_GLSL
+#include "shared_constants.glsl"
 struct PreviewDraw {
     mat4 clip_from_object;
     // Rows of the 3x3 matrix taking object normals to view space (inverse transpose), padded to vec4.
@@ -16,5 +17,5 @@ struct PreviewDraw {
     int pad2;
 };
 
-layout(set = 0, binding = 0, std430) readonly buffer PreviewDraws { PreviewDraw draws[]; };
+layout(set = 0, binding = PREVIEW_BINDING_DRAWS, std430) readonly buffer PreviewDraws { PreviewDraw draws[]; };
 #endif

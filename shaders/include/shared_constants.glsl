@@ -16,9 +16,36 @@ const uint ACCUMULATE_BINDING_COUNTERS = 8u;
 const uint ACCUMULATE_BINDING_CAMERAS = 9u;
 // The side of the accumulation compute shader's square workgroup: one tile of its tile queue.
 const uint ACCUMULATE_TILE_SIZE = 8u;
-// Counters per sample slot (binding 8): shadow rays, secondary rays, the next tile to shade.
+// The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device
+// (accumulate.rgen's PIXEL_RUNS; lavapipe runs a pipeline as a compute shader of 8-lane workgroups).
+const uint ACCUMULATE_RUN_LENGTH = 8u;
+// Counters per sample slot (binding 8): shadow rays, secondary rays, the next tile to shade (accumulate.comp).
 const uint COUNTER_SHADOW_RAYS = 0u;
 const uint COUNTER_SECONDARY_RAYS = 1u;
 const uint COUNTER_NEXT_TILE = 2u;
 const uint COUNTERS_PER_SLOT = 3u;
+
+// The G-buffer pass's descriptor bindings (gbuffer_layout.glsl, gbuffer.frag; render::gbuffer::GBufferPass).
+const uint GBUFFER_BINDING_DRAWS = 0u;
+const uint GBUFFER_BINDING_MATERIALS = 1u;
+const uint GBUFFER_BINDING_TEXTURES = 2u;
+
+// The preview pass's descriptor bindings (preview_layout.glsl, preview.frag; render::preview::PreviewPass).
+const uint PREVIEW_BINDING_DRAWS = 0u;
+const uint PREVIEW_BINDING_TEXTURES = 1u;
+
+// The resolve pass (resolve.comp; render::resolve::ResolvePass): its bindings and its square workgroup's side.
+const uint RESOLVE_BINDING_ACCUMULATION = 0u;
+const uint RESOLVE_BINDING_DISPLAY = 1u;
+const uint RESOLVE_TILE_SIZE = 8u;
+
+// The probes' compute shaders (ray_probe.comp, noise_probe.comp, sampling_probe.comp): one workgroup size for
+// all three (one invocation per ray or point), and their bindings.
+const uint PROBE_WORKGROUP_SIZE = 64u;
+const uint RAY_PROBE_BINDING_TLAS = 0u;
+const uint RAY_PROBE_BINDING_RAYS = 1u;
+const uint RAY_PROBE_BINDING_HITS = 2u;
+const uint NOISE_PROBE_BINDING_POINTS = 0u;
+const uint NOISE_PROBE_BINDING_RESULTS = 1u;
+const uint SAMPLING_PROBE_BINDING_RESULTS = 0u;
 #endif

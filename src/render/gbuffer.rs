@@ -8,6 +8,7 @@ use super::textures::GpuTextures;
 use crate::math::lens::CameraSample;
 use crate::scene::{Material, Scene};
 use crate::shaders;
+use crate::shaders::constants::{GBUFFER_BINDING_DRAWS, GBUFFER_BINDING_MATERIALS, GBUFFER_BINDING_TEXTURES};
 use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
 use crate::vk::descriptors::DescriptorSet;
 use crate::vk::pipeline::{Binding, GraphicsDesc, Pipeline};
@@ -122,6 +123,17 @@ const VERTEX_STREAMS: [(u32, vk::Format); 7] = [
 ];
 
 impl GBufferPass {
+    /// The pass's descriptor bindings, as `gbuffer_layout.glsl` and `gbuffer.frag` declare them
+    /// (tests/contracts.rs holds the SPIR-V to this list).
+    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+        use vk::DescriptorType as D;
+        vec![
+            Binding::new(GBUFFER_BINDING_DRAWS, D::STORAGE_BUFFER),
+            Binding::new(GBUFFER_BINDING_MATERIALS, D::STORAGE_BUFFER),
+            Binding { binding: GBUFFER_BINDING_TEXTURES, kind: D::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+        ]
+    }
+
     /// A G-buffer pipeline for scenes with `texture_count` textures (at least one: see `GpuTextures`).
     pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
         let vertex_bindings: Vec<vk::VertexInputBindingDescription> = VERTEX_STREAMS
@@ -136,11 +148,7 @@ impl GBufferPass {
                 vk::VertexInputAttributeDescription::default().location(i as u32).binding(i as u32).format(*format)
             })
             .collect();
-        let bindings = [
-            Binding::new(0, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
-            Binding { binding: 2, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
-        ];
+        let bindings = Self::bindings(texture_count);
         let formats: Vec<vk::Format> = ATTACHMENTS.iter().map(|a| a.format).collect();
         let pipeline = Pipeline::graphics(
             device,
@@ -218,9 +226,9 @@ impl GBufferPass {
             16,
         )?;
         let set = self.pipeline.new_descriptor_set("gbuffer set")?;
-        set.storage_buffer(0, &draws)
-            .storage_buffer(1, &materials.buffer)
-            .combined_image_samplers(2, &textures.bindings());
+        set.storage_buffer(GBUFFER_BINDING_DRAWS, &draws)
+            .storage_buffer(GBUFFER_BINDING_MATERIALS, &materials.buffer)
+            .combined_image_samplers(GBUFFER_BINDING_TEXTURES, &textures.bindings());
         Ok(GBufferInputs { draws, geometry: gpu_scene, _materials: materials, set, order, draw_of, slots })
     }
 

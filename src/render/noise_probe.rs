@@ -1,6 +1,7 @@
 //! Runs `shaders/noise_probe.comp`: noise, fBm and turbulence with gradients at given points on the GPU, to check
 //! `noise.glsl` against its CPU twin (`math::noise`).
 use crate::shaders;
+use crate::shaders::constants::{NOISE_PROBE_BINDING_POINTS, NOISE_PROBE_BINDING_RESULTS, PROBE_WORKGROUP_SIZE};
 use crate::vk::commands::{buffer_barrier, labelled, submit_and_wait, Access};
 use crate::vk::pipeline::{Binding, Pipeline};
 use crate::vk::{Buffer, Device, MemoryLocation};
@@ -29,14 +30,21 @@ pub struct NoiseProbe {
 }
 
 impl NoiseProbe {
+    /// The probe's descriptor bindings, as `noise_probe.comp` declares them (tests/contracts.rs holds the SPIR-V
+    /// to this list).
+    pub fn bindings() -> Vec<Binding> {
+        vec![
+            Binding::new(NOISE_PROBE_BINDING_POINTS, vk::DescriptorType::STORAGE_BUFFER),
+            Binding::new(NOISE_PROBE_BINDING_RESULTS, vk::DescriptorType::STORAGE_BUFFER),
+        ]
+    }
+
     pub fn new(device: &Arc<Device>) -> Result<Self> {
-        let bindings =
-            [Binding::new(0, vk::DescriptorType::STORAGE_BUFFER), Binding::new(1, vk::DescriptorType::STORAGE_BUFFER)];
         let pipeline = Pipeline::compute(
             device,
             "noise probe",
             ("noise_probe.comp", shaders::NOISE_PROBE_COMP),
-            &bindings,
+            &Self::bindings(),
             std::mem::size_of::<NoiseProbePush>() as u32,
         )?;
         Ok(Self { pipeline, device: device.clone() })
@@ -58,12 +66,12 @@ impl NoiseProbe {
             16,
         )?;
         let set = self.pipeline.new_descriptor_set("noise probe set")?;
-        set.storage_buffer(0, &input).storage_buffer(1, &output);
+        set.storage_buffer(NOISE_PROBE_BINDING_POINTS, &input).storage_buffer(NOISE_PROBE_BINDING_RESULTS, &output);
         let push = NoiseProbePush { count: points.len() as u32, octaves, lacunarity, gain };
         submit_and_wait(device, "noise probe", |cmd| {
             labelled(device, cmd, "noise probe pass", || {
                 self.pipeline.bind(cmd, Some(&set), bytemuck::bytes_of(&push));
-                unsafe { device.raw.cmd_dispatch(cmd, push.count.div_ceil(64), 1, 1) };
+                unsafe { device.raw.cmd_dispatch(cmd, push.count.div_ceil(PROBE_WORKGROUP_SIZE), 1, 1) };
             });
             buffer_barrier(device, cmd, &output, Access::COMPUTE_WRITE, Access::HOST_READ);
             Ok(())

@@ -5,6 +5,7 @@ use super::textures::GpuTextures;
 use crate::output::Frame;
 use crate::scene::Scene;
 use crate::shaders;
+use crate::shaders::constants::{PREVIEW_BINDING_DRAWS, PREVIEW_BINDING_TEXTURES};
 use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
 use crate::vk::pipeline::{Binding, GraphicsDesc, Pipeline};
 use crate::vk::readback::read_image;
@@ -54,6 +55,16 @@ pub struct PreviewPass {
 }
 
 impl PreviewPass {
+    /// The pass's descriptor bindings, as `preview_layout.glsl` and `preview.frag` declare them
+    /// (tests/contracts.rs holds the SPIR-V to this list).
+    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+        use vk::DescriptorType as D;
+        vec![
+            Binding::new(PREVIEW_BINDING_DRAWS, D::STORAGE_BUFFER),
+            Binding { binding: PREVIEW_BINDING_TEXTURES, kind: D::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+        ]
+    }
+
     /// A preview pipeline for a scene with `texture_count` textures (at least one: see `GpuTextures`).
     pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
         let vertex_bindings = [
@@ -71,10 +82,7 @@ impl PreviewPass {
                 .binding(3)
                 .format(vk::Format::R32G32B32A32_SFLOAT),
         ];
-        let bindings = [
-            Binding::new(0, vk::DescriptorType::STORAGE_BUFFER),
-            Binding { binding: 1, kind: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
-        ];
+        let bindings = Self::bindings(texture_count);
         let pipeline = Pipeline::graphics(
             device,
             &GraphicsDesc {
@@ -152,7 +160,8 @@ impl PreviewPass {
         }
         let draw_buffer = Buffer::with_data(device, "preview draws", &draws, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
         let set = self.pipeline.new_descriptor_set("preview set")?;
-        set.storage_buffer(0, &draw_buffer).combined_image_samplers(1, &textures.bindings());
+        set.storage_buffer(PREVIEW_BINDING_DRAWS, &draw_buffer)
+            .combined_image_samplers(PREVIEW_BINDING_TEXTURES, &textures.bindings());
 
         submit_and_wait(device, "preview frame", |cmd| {
             image_barrier(

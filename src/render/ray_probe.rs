@@ -1,6 +1,9 @@
 //! A bare ray-query pass: casts rays from a buffer against a TLAS and returns the closest hits, with no
 //! shading. The ray-query smoke test uses it; benchmarks use it as the driver's ray-throughput ceiling.
 use crate::shaders;
+use crate::shaders::constants::{
+    PROBE_WORKGROUP_SIZE, RAY_PROBE_BINDING_HITS, RAY_PROBE_BINDING_RAYS, RAY_PROBE_BINDING_TLAS,
+};
 use crate::vk::accel::AccelerationStructure;
 use crate::vk::commands::{buffer_barrier, labelled, submit_and_wait, Access};
 use crate::vk::pipeline::{Binding, Pipeline};
@@ -48,7 +51,7 @@ impl ProbeHit {
     }
 }
 
-const LOCAL_SIZE: u32 = 64;
+const LOCAL_SIZE: u32 = PROBE_WORKGROUP_SIZE;
 
 pub struct RayProbe {
     pipeline: Pipeline,
@@ -56,15 +59,21 @@ pub struct RayProbe {
 }
 
 impl RayProbe {
+    /// The probe's descriptor bindings, as `ray_probe.comp` declares them (tests/contracts.rs holds the SPIR-V
+    /// to this list).
+    pub fn bindings() -> Vec<Binding> {
+        use vk::DescriptorType as D;
+        vec![
+            Binding::new(RAY_PROBE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
+            Binding::new(RAY_PROBE_BINDING_RAYS, D::STORAGE_BUFFER),
+            Binding::new(RAY_PROBE_BINDING_HITS, D::STORAGE_BUFFER),
+        ]
+    }
+
     pub fn new(device: &Arc<Device>) -> Result<Self> {
         device.require_ray_queries("the ray probe")?;
-        let bindings = [
-            Binding::new(0, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR),
-            Binding::new(1, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(2, vk::DescriptorType::STORAGE_BUFFER),
-        ];
         let pipeline =
-            Pipeline::compute(device, "ray probe", ("ray_probe.comp", shaders::RAY_PROBE_COMP), &bindings, 4)?;
+            Pipeline::compute(device, "ray probe", ("ray_probe.comp", shaders::RAY_PROBE_COMP), &Self::bindings(), 4)?;
         Ok(Self { pipeline, device: device.clone() })
     }
 
@@ -97,7 +106,9 @@ impl RayProbe {
             16,
         )?;
         let set = self.pipeline.new_descriptor_set("ray probe set")?;
-        set.acceleration_structure(0, tlas.raw).storage_buffer(1, &ray_buffer).storage_buffer(2, &hit_buffer);
+        set.acceleration_structure(RAY_PROBE_BINDING_TLAS, tlas.raw)
+            .storage_buffer(RAY_PROBE_BINDING_RAYS, &ray_buffer)
+            .storage_buffer(RAY_PROBE_BINDING_HITS, &hit_buffer);
         let count = rays.len() as u32;
         if let Some(timer) = timer {
             timer.reset();

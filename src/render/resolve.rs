@@ -3,6 +3,7 @@
 use super::accumulate_layout::ResolvePush;
 use crate::scene::settings::ToneMap;
 use crate::shaders;
+use crate::shaders::constants::{RESOLVE_BINDING_ACCUMULATION, RESOLVE_BINDING_DISPLAY, RESOLVE_TILE_SIZE};
 use crate::vk::commands::labelled;
 use crate::vk::descriptors::DescriptorSet;
 use crate::vk::pipeline::{Binding, Pipeline};
@@ -17,14 +18,21 @@ pub struct ResolvePass {
 }
 
 impl ResolvePass {
+    /// The pass's descriptor bindings, as `resolve.comp` declares them (tests/contracts.rs holds the SPIR-V to
+    /// this list).
+    pub fn bindings() -> Vec<Binding> {
+        vec![
+            Binding::new(RESOLVE_BINDING_ACCUMULATION, vk::DescriptorType::STORAGE_IMAGE),
+            Binding::new(RESOLVE_BINDING_DISPLAY, vk::DescriptorType::STORAGE_IMAGE),
+        ]
+    }
+
     pub fn new(device: &Arc<Device>) -> Result<Self> {
-        let bindings =
-            [Binding::new(0, vk::DescriptorType::STORAGE_IMAGE), Binding::new(1, vk::DescriptorType::STORAGE_IMAGE)];
         let pipeline = Pipeline::compute(
             device,
             "resolve pipeline",
             ("resolve.comp", shaders::RESOLVE_COMP),
-            &bindings,
+            &Self::bindings(),
             std::mem::size_of::<ResolvePush>() as u32,
         )?;
         Ok(Self { pipeline, device: device.clone() })
@@ -32,7 +40,7 @@ impl ResolvePass {
 
     pub fn descriptor_set(&self, accumulation: &Image, display: &Image) -> Result<DescriptorSet> {
         let set = self.pipeline.new_descriptor_set("resolve set")?;
-        set.storage_image(0, accumulation).storage_image(1, display);
+        set.storage_image(RESOLVE_BINDING_ACCUMULATION, accumulation).storage_image(RESOLVE_BINDING_DISPLAY, display);
         Ok(set)
     }
 
@@ -59,7 +67,14 @@ impl ResolvePass {
         };
         labelled(&self.device, cmd, "resolve pass", || {
             self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(&push));
-            unsafe { self.device.raw.cmd_dispatch(cmd, extent.width.div_ceil(8), extent.height.div_ceil(8), 1) };
+            unsafe {
+                self.device.raw.cmd_dispatch(
+                    cmd,
+                    extent.width.div_ceil(RESOLVE_TILE_SIZE),
+                    extent.height.div_ceil(RESOLVE_TILE_SIZE),
+                    1,
+                )
+            };
         });
     }
 }
