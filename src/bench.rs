@@ -215,7 +215,16 @@ pub fn time_frame(
 /// disk cache may hold the compiled code from an earlier run; the figure is then the cached cost.
 pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TracePath) -> Result<f64> {
     let started = std::time::Instant::now();
-    let pass = crate::render::accumulate::AccumulatePass::new(&gpu.device, path, 1, false, true, 0)?;
+    use crate::render::accumulate::{AccumulateLaunch, AccumulatePass, AccumulateVariant};
+    let variant = AccumulateVariant {
+        path,
+        texture_count: 1,
+        primary_rays: false,
+        alpha_tested: true,
+        launch: AccumulateLaunch::DeviceDefault,
+        table_shift: 0,
+    };
+    let pass = AccumulatePass::new(&gpu.device, &variant)?;
     let ms = started.elapsed().as_secs_f64() * 1e3;
     drop(pass);
     Ok(ms)

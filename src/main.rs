@@ -9,10 +9,11 @@ use std::process::ExitCode;
 #[command(
     name = "strata",
     version,
-    about = "A headless Vulkan renderer: distributed ray tracing with ray queries, validated on lavapipe",
+    about = "A headless Vulkan renderer: distributed ray tracing on any ray-tracing Vulkan device, validated on lavapipe",
     long_about = "strata renders glTF 2.0 scenes without a window through raw Vulkan and writes PNG or OpenEXR.\n\
-                  It needs a Vulkan 1.3 device with VK_KHR_ray_query: on a machine without a GPU, run\n\
-                  scripts/setup.sh to install Mesa's lavapipe. `strata info` shows what it finds.",
+                  It needs a Vulkan 1.3 device with acceleration structures and VK_KHR_ray_query or\n\
+                  VK_KHR_ray_tracing_pipeline (either way traces; --trace chooses): on a machine without a GPU,\n\
+                  run scripts/setup.sh to install Mesa's lavapipe. `strata info` shows what it finds.",
     after_help = "Examples:\n  strata info\n  strata render scenes/showcase.toml -o showcase.png\n  \
                   strata render model.glb -o frame.exr --size 1920x1080 --validate"
 )]
@@ -26,8 +27,8 @@ enum Command {
     /// Render a scene with distributed ray tracing (depth of field, motion blur, soft shadows, gloss,
     /// translucency) to a PNG (8-bit sRGB, tone-mapped) or OpenEXR (32-bit float linear radiance) file.
     #[command(after_help = "Each of the --spp samples rasterizes a G-buffer at its own lens point, shutter time and \
-                            sub-pixel jitter, then a compute pass casts shadow, gloss and translucency rays with \
-                            ray queries. The output format follows the extension of -o (.png or .exr); files are \
+                            sub-pixel jitter, then the accumulation pass casts shadow, gloss and translucency rays \
+                            (with ray queries, or through a ray-tracing pipeline: --trace). The output format follows the extension of -o (.png or .exr); files are \
                             written atomically, so a failed or interrupted render (Ctrl-C) leaves nothing behind.\n\n\
                             Examples:\n  strata render scenes/showcase.toml -o showcase.png\n  \
                             strata render scenes/dof.toml -o dof.png --spp 64 --aperture 0.05 --focus 3\n  \

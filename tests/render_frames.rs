@@ -443,37 +443,47 @@ fn the_ray_log_holds_every_ray_the_pass_casts_and_only_observes() {
     gpu.finish().unwrap();
 }
 
-/// The accumulation pass's workgroups take 8×8 tiles from a queue until it runs dry (load balance on lavapipe,
-/// which splits a dispatch's workgroups into one fixed run per thread). How many share the tiles must not matter:
-/// one workgroup shading every tile, a few, the device's default and more than there are tiles give the same bits
-/// and count the same rays, in both primary modes, on an image whose edge tiles are partial.
+/// On a CPU device the accumulation pass's workgroups share the work (load balance on lavapipe, which splits a
+/// launch into one fixed run of workgroups per thread): with ray queries they take 8×8 tiles from a queue until
+/// it runs dry; through the ray-tracing pipeline, rows of 8 invocations take 8-pixel runs in turn. How the work
+/// is spread must not matter: one workgroup doing everything, a few, the device's default, more than there are
+/// tiles, and a GPU's launch (one workgroup per tile, one invocation per pixel) give the same bits and count the
+/// same rays, both ways to trace, in both primary modes, on an image whose edge tiles are partial.
 #[test]
-fn the_picture_does_not_depend_on_how_many_workgroups_share_the_tiles() {
+fn the_picture_does_not_depend_on_how_the_work_is_spread_over_invocations() {
+    use strata::render::accumulate::AccumulateLaunch;
     use strata::render::frame::{render_frame, FrameOptions};
     let gpu = GpuTest::new();
     let scene = load(&repo("scenes/showcase.toml"));
     let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
     // 45x29 pixels: 6x4 = 24 tiles, the last column and row partial.
     let tiles = 24;
-    for primary in [Primary::Raster, Primary::Rays] {
-        // A background no surface shows, so a pixel no workgroup shaded (the image is never cleared) stands out.
+    let paths = strata::render::accumulate::TracePath::available(gpu.device());
+    for (path, primary) in paths.iter().flat_map(|p| [(*p, Primary::Raster), (*p, Primary::Rays)]) {
+        // A background no surface shows, so a pixel nothing shaded (the image is never cleared) stands out.
         let background = Vec3::new(0.25, 0.5, 0.75);
-        let s = RenderSettings { primary, background, ..settings(45, 29, 2, SamplerKind::MultiJittered) };
-        let frame = |workgroups: Option<u32>| {
-            let options = FrameOptions { accumulate_workgroups: workgroups, ..Default::default() };
+        let s = RenderSettings {
+            primary,
+            background,
+            trace: path.as_trace(),
+            ..settings(45, 29, 2, SamplerKind::MultiJittered)
+        };
+        let frame = |launch: AccumulateLaunch| {
+            let options = FrameOptions { accumulate_launch: launch, ..Default::default() };
             render_frame(gpu.device(), &scene, &on_gpu, &s, &options, &mut |_, _| true).unwrap()
         };
-        let default = frame(None);
+        let default = frame(AccumulateLaunch::DeviceDefault);
         assert!(default.stats.shadow_rays > 500 && default.stats.secondary_rays > 50, "{primary:?}: too few rays");
         let background_rgb = background.to_array();
         let unshaded = default.linear.pixels.iter().filter(|p| p[3] == 0.0 && p[..3] != background_rgb).count();
-        assert_eq!(unshaded, 0, "{primary:?}: pixels showing neither a surface nor the background");
+        assert_eq!(unshaded, 0, "{path:?} {primary:?}: pixels showing neither a surface nor the background");
         assert!(default.linear.pixels.iter().any(|p| p[3] == 0.0), "{primary:?}: the background is not in view");
-        for workgroups in [1, 3, tiles, tiles + 7] {
-            let other = frame(Some(workgroups));
-            assert!(other.linear == default.linear, "{primary:?}: {workgroups} workgroups changed the picture");
+        let launches = [1, 3, tiles, tiles + 7].map(AccumulateLaunch::Workgroups);
+        for launch in launches.into_iter().chain([AccumulateLaunch::OnePerTileOrPixel]) {
+            let other = frame(launch);
+            assert!(other.linear == default.linear, "{path:?} {primary:?}: {launch:?} changed the picture");
             let rays = |f: &strata::render::frame::RenderedFrame| (f.stats.shadow_rays, f.stats.secondary_rays);
-            assert_eq!(rays(&other), rays(&default), "{primary:?}: {workgroups} workgroups counted other rays");
+            assert_eq!(rays(&other), rays(&default), "{path:?} {primary:?}: {launch:?} counted other rays");
         }
     }
     drop(on_gpu);

@@ -3,8 +3,10 @@
 //! the RGBA32F accumulation image. One shading body (`shaders/include/path_tracer.glsl`) traces in one of two
 //! ways ([`TracePath`]): with ray queries in a compute shader (`accumulate.comp`), whose workgroups take the
 //! image's 8×8 tiles from a queue (a counter per sample) so that threads that finish early take more
-//! ([`workgroups_for`]); or through a ray-tracing pipeline (`accumulate.rgen`, one invocation per pixel, with
-//! hit shaders that only record the hit and run the alpha test), for devices without ray queries.
+//! ([`workgroups_for`]); or through a ray-tracing pipeline (`accumulate.rgen`, with hit shaders that only record
+//! the hit and run the alpha test), for devices without ray queries: one invocation per pixel on a GPU, and on a
+//! CPU device a few rows of 8 invocations that deal 8-pixel runs of the image out in turn, for the same reason
+//! ([`AccumulateLaunch`]).
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
 use super::gbuffer_layout::IDS;
@@ -95,6 +97,8 @@ enum Tracer {
         table: Box<ShaderBindingTable>,
         /// The device's ray-tracing commands (`vkCmdTraceRaysKHR`).
         commands: ash::khr::ray_tracing_pipeline::Device,
+        /// The raygen shader's invocations take 8-pixel runs in turn (its PIXEL_RUNS specialization constant).
+        pixel_runs: bool,
     },
 }
 
@@ -102,6 +106,7 @@ pub struct AccumulatePass {
     tracer: Tracer,
     /// Nearest, clamped: the G-buffer is read texel by texel.
     gbuffer_sampler: Sampler,
+    launch: AccumulateLaunch,
     device: Arc<Device>,
 }
 
@@ -119,24 +124,49 @@ pub struct AccumulateInputs<'a> {
     pub cameras: &'a Buffer,
 }
 
+/// How the pass spreads a sample's pixels over the invocations it launches. The picture does not depend on it
+/// (render_frames.rs checks every kind bit for bit); speed does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AccumulateLaunch {
+    /// What suits the device: on a CPU device a few workgroups sharing the work ([`workgroups_for`],
+    /// [`CPU_PIPELINE_INVOCATIONS`]); on a GPU one workgroup per tile or one invocation per pixel.
+    #[default]
+    DeviceDefault,
+    /// This many workgroups share the work: with ray queries they take 8×8 tiles from a queue; through the
+    /// pipeline, rows of 8 invocations take 8-pixel runs in turn.
+    Workgroups(u32),
+    /// A GPU's launch on any device: one workgroup per tile (ray queries), one invocation per pixel (pipeline).
+    OnePerTileOrPixel,
+}
+
+/// Which accumulation pipeline a pass builds.
+#[derive(Debug, Clone, Copy)]
+pub struct AccumulateVariant {
+    pub path: TracePath,
+    /// Entries of the bindless texture array.
+    pub texture_count: u32,
+    /// Trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
+    pub primary_rays: bool,
+    /// Some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is forced opaque and
+    /// the pipeline carries no alpha test (and no any-hit shader).
+    pub alpha_tested: bool,
+    pub launch: AccumulateLaunch,
+    /// Bytes to move the shader binding table off its alignment (0 but in the test that breaks it on purpose).
+    pub table_shift: u64,
+}
+
 impl AccumulatePass {
-    /// `primary_rays`: trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
-    /// `alpha_tested`: some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is
-    /// forced opaque and the pipeline carries no alpha test (and no any-hit shader).
-    /// `table_shift`: bytes to move the shader binding table off its alignment (0 but in the test that breaks it
-    /// on purpose).
-    pub fn new(
-        device: &Arc<Device>,
-        path: TracePath,
-        texture_count: u32,
-        primary_rays: bool,
-        alpha_tested: bool,
-        table_shift: u64,
-    ) -> Result<Self> {
+    pub fn new(device: &Arc<Device>, variant: &AccumulateVariant) -> Result<Self> {
+        let AccumulateVariant { path, texture_count, primary_rays, alpha_tested, launch, table_shift } = *variant;
         let bindings = Self::bindings(texture_count);
-        let constants = [u32::from(primary_rays), u32::from(alpha_tested)];
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
         let mode = if primary_rays { " (primary rays)" } else { "" };
+        let cpu = device.report.device_type == vk::PhysicalDeviceType::CPU;
+        let pixel_runs = match launch {
+            AccumulateLaunch::DeviceDefault => cpu,
+            AccumulateLaunch::Workgroups(_) => true,
+            AccumulateLaunch::OnePerTileOrPixel => false,
+        };
         let tracer = match path {
             TracePath::Query => Tracer::Query(Pipeline::compute_specialized(
                 device,
@@ -144,25 +174,26 @@ impl AccumulatePass {
                 ("accumulate.comp", shaders::ACCUMULATE_COMP),
                 &bindings,
                 push_constant_size,
-                &constants,
+                &[u32::from(primary_rays), u32::from(alpha_tested)],
             )?),
             TracePath::Pipeline => {
+                let runs = if pixel_runs { ", pixel runs" } else { "" };
                 let pipeline = Pipeline::ray_tracing(
                     device,
                     &RayTracingDesc {
-                        name: &format!("accumulate ray-tracing pipeline{mode}"),
+                        name: &format!("accumulate ray-tracing pipeline{mode}{runs}"),
                         raygen: ("accumulate.rgen", shaders::ACCUMULATE_RGEN),
                         miss: ("accumulate.rmiss", shaders::ACCUMULATE_RMISS),
                         closest_hit: ("accumulate.rchit", shaders::ACCUMULATE_RCHIT),
                         any_hit: alpha_tested.then_some(("accumulate.rahit", shaders::ACCUMULATE_RAHIT)),
                         bindings: &bindings,
                         push_constant_size,
-                        constants: &constants,
+                        constants: &[u32::from(primary_rays), u32::from(alpha_tested), u32::from(pixel_runs)],
                     },
                 )?;
                 let table = Box::new(ShaderBindingTable::new(device, &pipeline, table_shift)?);
                 let commands = device.require_ray_tracing_pipelines("the accumulation pass")?.loader.clone();
-                Tracer::Pipeline { pipeline, table, commands }
+                Tracer::Pipeline { pipeline, table, commands, pixel_runs }
             }
         };
         let gbuffer_sampler = Sampler::new(
@@ -176,7 +207,7 @@ impl AccumulatePass {
                 mipmaps: None,
             },
         )?;
-        Ok(Self { tracer, gbuffer_sampler, device: device.clone() })
+        Ok(Self { tracer, gbuffer_sampler, launch, device: device.clone() })
     }
 
     /// The pass's descriptor bindings, as `shaders/include/accumulate_bindings.glsl` declares them (every stage
@@ -253,23 +284,30 @@ impl AccumulatePass {
     }
 
     /// Records one sample's dispatch (or trace); the caller has made the G-buffer readable and the TLAS built,
-    /// and zeroed the sample's counters (its tile queue starts at the first tile). `workgroups` overrides how many
-    /// workgroups share the tiles ([`workgroups_for`]; the pipeline path launches one invocation per pixel).
-    pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush, workgroups: Option<u32>) {
+    /// and zeroed the sample's counters (its tile queue starts at the first tile).
+    pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush) {
         let device = &self.device;
+        let device_type = device.report.device_type;
         match &self.tracer {
             Tracer::Query(pipeline) => {
                 let tiles = push.width.div_ceil(LOCAL_SIZE) * push.height.div_ceil(LOCAL_SIZE);
-                let groups = match workgroups {
-                    Some(n) => n.clamp(1, MAX_WORKGROUPS),
-                    None => workgroups_for(tiles, device.report.device_type),
+                let groups = match self.launch {
+                    AccumulateLaunch::DeviceDefault => workgroups_for(tiles, device_type),
+                    AccumulateLaunch::Workgroups(n) => n.clamp(1, MAX_WORKGROUPS),
+                    AccumulateLaunch::OnePerTileOrPixel => workgroups_for(tiles, vk::PhysicalDeviceType::DISCRETE_GPU),
                 };
                 labelled(device, cmd, "accumulate pass (ray queries)", || {
                     pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
                     unsafe { device.raw.cmd_dispatch(cmd, groups, 1, 1) };
                 });
             }
-            Tracer::Pipeline { pipeline, table, commands } => {
+            Tracer::Pipeline { pipeline, table, commands, pixel_runs } => {
+                // Runs are dealt to one row of invocations, 8 per workgroup; otherwise one invocation per pixel.
+                let (width, height) = match (pixel_runs, self.launch) {
+                    (false, _) => (push.width, push.height),
+                    (true, AccumulateLaunch::Workgroups(n)) => (RUN_LENGTH * n.clamp(1, MAX_WORKGROUPS), 1),
+                    (true, _) => (CPU_PIPELINE_INVOCATIONS, 1),
+                };
                 labelled(device, cmd, "accumulate pass (ray-tracing pipeline)", || {
                     pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
                     unsafe {
@@ -279,8 +317,8 @@ impl AccumulatePass {
                             &table.miss,
                             &table.hit,
                             &table.callable,
-                            push.width,
-                            push.height,
+                            width,
+                            height,
                             1,
                         )
                     };
@@ -289,6 +327,14 @@ impl AccumulatePass {
         }
     }
 }
+
+/// The pixels of a row one workgroup of the pipeline path shades together on a CPU device: lavapipe runs a
+/// ray-tracing pipeline as a compute shader of 8-lane workgroups (lvp_ray_tracing_pipeline.c).
+const RUN_LENGTH: u32 = crate::shaders::constants::ACCUMULATE_RUN_LENGTH;
+
+/// Invocations a CPU device's ray-tracing launch gets when they deal out 8-pixel runs: as many of lavapipe's
+/// workgroups as [`CPU_WORKGROUPS`] gives the compute path.
+pub const CPU_PIPELINE_INVOCATIONS: u32 = RUN_LENGTH * CPU_WORKGROUPS;
 
 /// The most workgroups one dispatch of the pass launches: the least `maxComputeWorkGroupCount[0]` the Vulkan
 /// spec lets a device report. Each workgroup loops over tiles, so fewer workgroups than tiles still cover the image.

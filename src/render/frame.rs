@@ -2,7 +2,9 @@
 //! lens point from the sampler), the instances and lights at that time, a TLAS rebuild, the G-buffer pass and
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
-use super::accumulate::{counter_bytes, AccumulateInputs, AccumulatePass, TracePath};
+use super::accumulate::{
+    counter_bytes, AccumulateInputs, AccumulateLaunch, AccumulatePass, AccumulateVariant, TracePath,
+};
 use super::accumulate_layout::{
     AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT, COUNTER_SECONDARY_RAYS, COUNTER_SHADOW_RAYS,
 };
@@ -68,9 +70,9 @@ pub struct FrameOptions {
     /// Record every ray the first sample's accumulation pass casts, into [`RenderedFrame::ray_log`] (for the
     /// benchmark to replay through the bare ray-query probe).
     pub log_rays: bool,
-    /// How many workgroups share the accumulation pass's tiles (None: the device's default,
-    /// [`accumulate::workgroups_for`](super::accumulate::workgroups_for)). The picture does not depend on it.
-    pub accumulate_workgroups: Option<u32>,
+    /// How the accumulation pass spreads pixels over its invocations (the device's default unless a test asks
+    /// for another). The picture does not depend on it.
+    pub accumulate_launch: AccumulateLaunch,
     /// The direct-light estimator (MIS unless a test asks for one strategy alone).
     pub direct_light: DirectLight,
     /// Make [`RenderedFrame::linear`]'s alpha the mean of each sample's squared luminance instead of coverage,
@@ -255,11 +257,14 @@ pub fn render_frame(
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
     let accumulate = AccumulatePass::new(
         device,
-        TracePath::choose(settings.trace, device)?,
-        texture_count,
-        traced,
-        ray_scene.alpha_tested,
-        options.misalign_shader_binding_table,
+        &AccumulateVariant {
+            path: TracePath::choose(settings.trace, device)?,
+            texture_count,
+            primary_rays: traced,
+            alpha_tested: ray_scene.alpha_tested,
+            launch: options.accumulate_launch,
+            table_shift: options.misalign_shader_binding_table,
+        },
     )?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
@@ -392,7 +397,7 @@ pub fn render_frame(
                 } else {
                     memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 }
-                accumulate.record(cmd, &accumulate_set, push, options.accumulate_workgroups);
+                accumulate.record(cmd, &accumulate_set, push);
                 stamp(3, accumulate.stage());
             }
             memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
