@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # strata on one GPU, in one go: the device as strata sees it, the optics and frame tests that run there, the
-# showcase at 1920x1080 with 64 spp (time, rays/s, and its difference from a reference picture), the frame
-# benchmark, and a short report. Made for a machine with an NVIDIA GPU and its driver (an H100 or H200 traces with
+# showcase at 1920x1080 with 64 spp (time, rays/s, and its difference from a reference picture), `strata check`,
+# the frame benchmark, and a short report. Made for a machine with an NVIDIA GPU and its driver (an H100 or H200 traces with
 # ray-tracing pipelines: they have no ray queries), and proven on lavapipe with `--device llvmpipe`.
 #
 #   scripts/gpu-check.sh [--device NAME|INDEX] [--out DIR] [--prebuilt DIR] [--reference PNG] [--quick]
@@ -142,6 +142,12 @@ if [ -n "$reference" ]; then
         note "- showcase against $reference: not compared (python3 lacks numpy or pillow)"
     fi
 fi
+
+# The render check suite against the goldens embedded in strata (made on lavapipe): on another device the exact
+# tier has no hash, so the perceptual tier decides; its report.html shows every failing case.
+step "strata check (the render check suite)" "$out/check.txt" \
+    "$strata" check --out "$out/check" --junit "$out/check/junit.xml" "${dev_args[@]}"
+tail -n 4 "$out/check.txt" | sed 's/^/  /' | tee -a "$report"
 
 step "strata bench (frame)" "$out/bench.txt" "$strata" bench --only frame "${bench[@]}" "${dev_args[@]}"
 grep -E '^scenes/|pipeline creation|ways to trace|samples/s' "$out/bench.txt" | sed 's/^/  /' | tee -a "$report"

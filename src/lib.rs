@@ -1,6 +1,7 @@
 //! strata: a headless Vulkan renderer. Floors, top to bottom: `main.rs` → this API → `render/` →
 //! {`vk/`, `scene/`, `output`}; nothing on a lower floor imports a higher one.
 pub mod bench;
+pub mod check;
 pub mod fatal_signals;
 pub mod math;
 pub mod output;

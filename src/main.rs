@@ -2,7 +2,7 @@
 mod cli;
 
 use clap::{Parser, Subcommand};
-use cli::args::{BenchArgs, InfoArgs, RenderArgs};
+use cli::args::{BenchArgs, CheckArgs, InfoArgs, RenderArgs};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -47,6 +47,19 @@ enum Command {
                             Examples:\n  strata bench\n  strata bench --samples 9 --scene scenes/cornell.toml\n  \
                             strata bench --only frame --size 64x64 --spp 2 --validate   # is the benchmark sound?")]
     Bench(BenchArgs),
+    /// Run the render check suite for driver, layer and renderer CI: closed-form optics, golden images (exact,
+    /// then perceptual), G-buffer channels, determinism and canaries, each case in its own process under the
+    /// validation layer; exits non-zero on any unexpected result.
+    #[command(after_help = "Reports go to --out: results.csv, failures.csv (a baseline for --expectations), \
+                            results.json, summary.md and report.html (every failing case with its pictures, \
+                            figures and the command that reproduces it). docs/check.md explains the cases, the \
+                            expectations file and how to add a case and regenerate goldens.\n\n\
+                            Exit status: 0 when every result was expected, 1 otherwise.\n\n\
+                            Examples:\n  strata check --junit report.xml\n  strata check --quick\n  \
+                            strata check --device nvidia --trace pipeline --expectations nvidia.toml\n  \
+                            strata check --fraction 2/4 --out shard-2\n  \
+                            strata check --bless --cases '^golden/'   # after an intended change of the pictures")]
+    Check(CheckArgs),
 }
 
 fn main() -> ExitCode {
@@ -56,6 +69,11 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render::render(args),
         Command::Info(args) => cli::info::info(args),
         Command::Bench(args) => cli::bench::bench(args),
+        Command::Check(args) => match cli::check::check(args) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::FAILURE,
+            Err(e) => Err(e),
+        },
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -6,121 +6,36 @@ mod common;
 use common::scenes::*;
 use common::GpuTest;
 use glam::{Mat4, Vec2, Vec3};
+use strata::check::optics::{self, disk_light_scene, ground_scene, light_down, moving_square, shadow_scene, Renderer};
+use strata::check::Figure;
 use strata::render::frame::RenderedFrame;
 use strata::scene::camera::{look_at, Lens};
 use strata::scene::settings::{Primary, RenderSettings, SamplerKind};
 use strata::scene::{Camera, Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 
-/// A light frame at `position` emitting straight down (its −Z is world −Y; its x is world x, its y world −z).
-fn light_down(position: Vec3) -> Mat4 {
-    look_at(position, position - Vec3::Y, Vec3::NEG_Z)
-}
-
-/// A scene of one 20 m × 20 m grey (albedo 0.8) Lambertian ground plane at y = 0, facing up.
-fn ground_scene() -> Scene {
-    let mut scene = Scene::default();
-    let ground = lambertian(&mut scene, 0.8);
-    let (p, m) = plane_at(Vec2::new(20.0, 20.0), Vec3::ZERO, false, ground);
-    place(&mut scene, "ground", p, m);
-    scene
-}
-
-/// Ground (y = 0) under an occluder covering x < 0 at height 2 (unless `occluded` is false), seen from below
-/// the occluder.
-fn shadow_scene(light: LightShape, emission: f32, occluded: bool) -> Scene {
-    let mut scene = ground_scene();
-    let occluder = lambertian(&mut scene, 0.5);
-    if occluded {
-        let slab = strata::scene::shapes::cuboid(Vec3::new(5.0, 0.01, 5.0), Some(occluder));
-        place(&mut scene, "occluder", slab, Mat4::from_translation(Vec3::new(-5.0, 2.0, 0.0)));
+/// Runs one of the library's optics cases (strata::check::optics, what `strata check` runs too) through the
+/// tests' renderer, which renders both ways to trace and holds them to the same bits, and asserts every figure.
+fn assert_optics(gpu: &GpuTest, case: impl FnOnce(&mut Renderer<'_>) -> anyhow::Result<Vec<Figure>>) {
+    let figures = case(&mut |scene: &Scene, settings: &RenderSettings| Ok(render(gpu.device(), scene, settings)))
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    assert!(!figures.is_empty());
+    for f in &figures {
+        eprintln!("{f}");
+        assert!(f.passes(), "{f}");
     }
-    scene.lights.push(Light {
-        name: "light".into(),
-        shape: light,
-        emission: Vec3::splat(emission),
-        world_from_light: light_down(Vec3::new(0.0, 4.0, 0.0)),
-        node: None,
-        range: 0.0,
-    });
-    scene.camera = Some(ortho_down(Vec3::ZERO, 1.0, 0.25));
-    scene
 }
 
 #[test]
 fn soft_shadow_penumbra_matches_similar_triangles_and_a_point_light_is_hard() {
     let gpu = GpuTest::new();
-    let (width, height) = (256, 64); // 2 m x 0.5 m: 128 px per metre
-    let px_per_m = 128.0;
-    // Light 0.5 m wide at height 4, occluder edge at height 2: the penumbra is w·h_o/(h_l − h_o) = 0.5 m wide,
-    // a (nearly) linear ramp whose 10%–90% part is 0.8 of it.
-    let quad = LightShape::Quad { size: Vec2::new(0.5, 6.0) };
-    let run = |occluded: bool| {
-        let frame = render(
-            gpu.device(),
-            &shadow_scene(quad, 2.0, occluded),
-            &settings(width, height, 64, SamplerKind::Jittered),
-        );
-        assert_finite(&frame, "soft shadow");
-        column_profile(&frame, 0..height)
-    };
-    // The fraction of the light each ground point sees: shadowed over unshadowed irradiance (which itself falls
-    // off away from under the light).
-    let (shadowed, open) = (run(true), run(false));
-    let profile: Vec<f32> = shadowed.iter().zip(&open).map(|(s, o)| s / o).collect();
-    let dark = profile[..20].iter().sum::<f32>() / 20.0;
-    let lit = profile[width as usize - 20..].iter().sum::<f32>() / 20.0;
-    assert!(dark < 0.01 && (lit - 1.0).abs() < 0.01, "umbra {dark}, fully lit {lit}");
-    let measured = rise_width(&profile, 0.0, 1.0);
-    let predicted = 0.8 * 0.5 * 2.0 / (4.0 - 2.0) * px_per_m;
-    assert!(
-        (measured - predicted).abs() <= 0.1 * predicted,
-        "penumbra 10-90% width {measured:.2} px, similar triangles predict {predicted:.2} px"
-    );
-    let middle = crossing(&profile, 0.5).unwrap();
-    assert!((middle - 128.0).abs() < 1.5, "the penumbra is centred under the edge (x = 0): {middle}");
-
-    let hard = shadow_scene(LightShape::Point { radius: 0.0 }, 20.0, true);
-    let frame = render(gpu.device(), &hard, &settings(width, height, 16, SamplerKind::Jittered));
-    let profile = column_profile(&frame, 0..height);
-    let lit = profile[width as usize - 20..].iter().sum::<f32>() / 20.0;
-    let edge = rise_width(&profile, 0.0, lit);
-    assert!(edge <= 1.5, "a point light of radius 0 casts a hard edge: 10-90% over {edge:.2} px");
-    drop(frame);
+    assert_optics(&gpu, optics::penumbra);
     gpu.finish().unwrap();
-}
-
-/// A Lambertian plane (albedo 0.8) under a 1 m disk light 1 m above it, seen straight down through a window
-/// `half_width` metres across, and the radiance it reflects on the axis: E = L·π·R² / (R² + h²) for the
-/// irradiance on the axis of a disk, ρ/π·E reflected.
-fn disk_light_scene(half_width: f32) -> (Scene, f32) {
-    let mut scene = Scene::default();
-    let albedo = 0.8;
-    let ground = lambertian(&mut scene, albedo);
-    let (p, m) = plane_at(Vec2::new(4.0, 4.0), Vec3::ZERO, false, ground);
-    place(&mut scene, "ground", p, m);
-    let (radius, h, radiance) = (1.0f32, 1.0f32, 2.0f32);
-    scene.lights.push(Light {
-        name: "disk".into(),
-        shape: LightShape::Disk { radius },
-        emission: Vec3::splat(radiance),
-        world_from_light: light_down(Vec3::new(0.0, h, 0.0)),
-        node: None,
-        range: 0.0,
-    });
-    scene.camera = Some(ortho_down(Vec3::ZERO, 0.5, half_width));
-    let expected =
-        albedo / std::f32::consts::PI * radiance * std::f32::consts::PI * radius * radius / (radius * radius + h * h);
-    (scene, expected)
 }
 
 #[test]
 fn energy_a_lambertian_plane_under_a_disk_light_reflects_the_analytic_radiance() {
     let gpu = GpuTest::new();
-    let (scene, expected) = disk_light_scene(0.01);
-    let frame = render(gpu.device(), &scene, &settings(32, 32, 64, SamplerKind::Jittered));
-    let mean = mean_red(&frame);
-    assert!((mean - expected).abs() <= 0.01 * expected, "mean radiance {mean}, analytic {expected}");
-    drop(frame);
+    assert_optics(&gpu, optics::disk_light_radiance);
     gpu.finish().unwrap();
 }
 
@@ -211,170 +126,28 @@ fn diffuse_interreflection_reflects_a_uniform_sky_as_the_albedo_and_never_counts
     gpu.finish().unwrap();
 }
 
+/// The furnace: inside a closed glowing box the radiance is the geometric series of the bounces (Kajiya 1986),
+/// cut where --bounces cuts the paths (optics::glowing_box).
 #[test]
 fn diffuse_interreflection_inside_a_glowing_box_sums_the_bounces() {
-    // Inside a closed box whose walls have albedo ρ and emit E, every vertex sees radiance arriving from walls
-    // alone, so light sampling at vertex k adds ρ^(k+1)·E: with paths of B bounces the radiance is
-    // E·(1 + ρ + … + ρ^(B+1)), the geometric series of the rendering equation (Kajiya 1986) cut at B. Without
-    // interreflection it is E·(1 + ρ).
-    use strata::scene::Material;
     let gpu = GpuTest::new();
-    let (albedo, emission) = (0.5f32, 1.0f32);
-    let mut scene = Scene::default();
-    scene.materials.push(Material {
-        name: "glowing wall".into(),
-        base_color: glam::Vec4::new(albedo, albedo, albedo, 1.0),
-        metallic: 0.0,
-        roughness: 1.0,
-        specular: 0.0,
-        emissive: Vec3::splat(emission),
-        double_sided: true,
-        ..Default::default()
-    });
-    place(&mut scene, "box", strata::scene::shapes::cuboid(Vec3::ONE, Some(0)), Mat4::IDENTITY);
-    scene.camera = Some(Camera {
-        name: "inside".into(),
-        world_from_camera: Mat4::from_translation(Vec3::new(0.0, 0.0, 0.5)),
-        projection: Projection::Perspective { yfov: 50f32.to_radians(), znear: 0.05, zfar: Some(10.0) },
-        lens: Lens::PINHOLE,
-    });
-    let mean = |indirect: bool, bounces: u32| {
-        let s = RenderSettings { indirect, bounces, ..settings(32, 32, 256, SamplerKind::Jittered) };
-        f64::from(mean_red(&render(gpu.device(), &scene, &s)))
-    };
-    let series = |terms: u32| (0..=terms).map(|k| f64::from(albedo).powi(k as i32)).sum::<f64>() * f64::from(emission);
-    let direct = mean(false, 3);
-    assert!((direct - series(1)).abs() <= 0.01 * series(1), "direct only: {direct:.4}, E(1 + ρ) = {:.4}", series(1));
     // The default 3 bounces and 1 (their series differ by 9%).
-    for bounces in [3, 1] {
-        let (measured, expected) = (mean(true, bounces), series(bounces + 1));
-        eprintln!("{bounces} bounces: {measured:.4}, series {expected:.4}");
-        assert!(
-            (measured - expected).abs() <= 0.01 * expected,
-            "{bounces} bounces: {measured:.4}, but E·Σρ^k to k = {} is {expected:.4} (to infinity {:.4})",
-            bounces + 1,
-            series(64)
-        );
-    }
+    assert_optics(&gpu, |render| optics::glowing_box_series(render, &[3, 1]));
     gpu.finish().unwrap();
-}
-
-/// The 10–90% width of the edge spread of a uniform disk of diameter 1 seen through a one-pixel box filter of
-/// width `box_px / diameter_px`: the ratio that turns a measured edge width into a circle of confusion.
-fn disk_edge_width_ratio(diameter_px: f32) -> f32 {
-    let r = 0.5f64;
-    let cdf = |x: f64| -> f64 {
-        let x = x.clamp(-r, r);
-        0.5 + (x * (r * r - x * x).sqrt() + r * r * (x / r).asin()) / (std::f64::consts::PI * r * r)
-    };
-    // Box-filtered: the mean of the CDF over one pixel (in units of the diameter).
-    let pixel = 1.0 / f64::from(diameter_px);
-    let filtered =
-        |x: f64| (0..64).map(|i| cdf(x - pixel / 2.0 + pixel * (f64::from(i) + 0.5) / 64.0)).sum::<f64>() / 64.0;
-    let solve = |level: f64| {
-        let (mut lo, mut hi) = (-1.0, 1.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if filtered(mid) < level {
-                lo = mid
-            } else {
-                hi = mid
-            }
-        }
-        lo
-    };
-    (solve(0.9) - solve(0.1)) as f32
-}
-
-fn dof_scene(aperture: f32, focus: f32, depth: f32) -> Scene {
-    let mut scene = Scene::default();
-    let bright = emitter(&mut scene, 1.0);
-    // An emitting half-plane x > 0 facing the camera at depth `depth`.
-    let primitive = strata::scene::shapes::plane(Vec2::new(10.0, 10.0), Vec2::ONE, Some(bright));
-    place(
-        &mut scene,
-        "edge",
-        primitive,
-        Mat4::from_translation(Vec3::new(5.0, 0.0, -depth)) * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
-    );
-    scene.camera = Some(Camera {
-        name: "lens".into(),
-        world_from_camera: Mat4::IDENTITY,
-        projection: Projection::Perspective { yfov: 30f32.to_radians(), znear: 0.1, zfar: Some(100.0) },
-        lens: Lens { aperture_radius: aperture, focus_distance: focus },
-    });
-    scene
 }
 
 #[test]
 fn depth_of_field_blur_is_the_circle_of_confusion() {
     let gpu = GpuTest::new();
-    let (width, height) = (128u32, 48u32);
-    let (aperture, focus, depth) = (0.2f32, 2.0f32, 4.0f32);
-    let frame = render(
-        gpu.device(),
-        &dof_scene(aperture, focus, depth),
-        &settings(width, height, 256, SamplerKind::MultiJittered),
-    );
-    let profile = column_profile(&frame, 8..40);
-    let measured = rise_width(&profile, 0.0, 1.0);
-    // CoC on the focus plane 2A|d − f|/d, in pixels: the focus plane is 2 f tan(fov/2) tall.
-    let lens = Lens { aperture_radius: aperture, focus_distance: focus };
-    let px_per_m = height as f32 / (2.0 * focus * 15f32.to_radians().tan());
-    let coc_px = lens.circle_of_confusion(depth) * px_per_m;
-    let predicted = disk_edge_width_ratio(coc_px) * coc_px;
-    assert!(
-        (measured - predicted).abs() <= 0.1 * predicted,
-        "edge 10-90% width {measured:.2} px; a circle of confusion of {coc_px:.2} px predicts {predicted:.2} px"
-    );
-
-    let sharp = render(
-        gpu.device(),
-        &dof_scene(aperture, depth, depth),
-        &settings(width, height, 64, SamplerKind::MultiJittered),
-    );
-    let profile = column_profile(&sharp, 8..40);
-    let width_in_focus = rise_width(&profile, 0.0, 1.0);
-    assert!(width_in_focus <= 1.5, "in focus (d = f) the edge is sharp: {width_in_focus:.2} px");
-    drop((frame, sharp));
+    assert_optics(&gpu, optics::circle_of_confusion);
     gpu.finish().unwrap();
-}
-
-fn moving_square(velocity: Vec3, angular: Vec3, shutter: (f32, f32)) -> Scene {
-    let mut scene = Scene::default();
-    let bright = emitter(&mut scene, 1.0);
-    let (p, m) = plane_at(Vec2::new(0.5, 0.5), Vec3::ZERO, false, bright);
-    let node = place(&mut scene, "square", p, m);
-    scene.node_motion.push(NodeMotion { node, motion: RigidMotion { velocity, angular_velocity: angular } });
-    scene.shutter = shutter;
-    scene.camera = Some(ortho_down(Vec3::ZERO, 1.0, 0.5));
-    scene
 }
 
 #[test]
 fn motion_blur_is_a_linear_ramp_as_long_as_the_motion() {
     let gpu = GpuTest::new();
-    let (width, height) = (192u32, 64u32); // 64 px per metre
-    let shutter = (0.0, 0.25);
-    let scene = moving_square(Vec3::new(1.0, 0.0, 0.0), Vec3::ZERO, shutter);
-    let frame = render(gpu.device(), &scene, &settings(width, height, 64, SamplerKind::Jittered));
-    let profile = column_profile(&frame, 24..40);
-    let ramp_px = 1.0 * (shutter.1 - shutter.0) * 64.0;
-    // The left side of the streak rises from 0 to 1 over the travel.
-    let rising = &profile[..(width / 2) as usize + 20];
-    let peak = rising.iter().cloned().fold(0.0, f32::max);
-    assert!((peak - 1.0).abs() < 0.02, "the square covers its middle for the whole shutter: {peak}");
-    let from = crossing(rising, 0.02).unwrap();
-    let quarter = crossing(rising, 0.25).unwrap();
-    let three_quarters = crossing(rising, 0.75).unwrap();
-    let measured = (three_quarters - quarter) * 2.0;
-    assert!((measured - ramp_px).abs() <= 1.0, "ramp {measured:.2} px, v·(close − open) = {ramp_px:.2} px");
-    // Linear: its 25%, 50% and 75% points are evenly spaced, and it starts where the square started.
-    let half = crossing(rising, 0.5).unwrap();
-    assert!(((half - quarter) - (three_quarters - half)).abs() <= 0.5, "{quarter} {half} {three_quarters}");
-    let start_px = width as f32 / 2.0 - 0.25 * 64.0;
-    assert!((from - start_px).abs() <= 1.5, "the streak starts at the square's left edge at t=0: {from} vs {start_px}");
-
+    assert_optics(&gpu, optics::motion_blur_ramp);
+    let (width, height) = (192u32, 64u32);
     // The same square with the shutter closed is the still frame, bit for bit.
     let still_shutter = render(
         gpu.device(),
@@ -387,7 +160,7 @@ fn motion_blur_is_a_linear_ramp_as_long_as_the_motion() {
         &settings(width, height, 4, SamplerKind::Jittered),
     );
     assert!(still_shutter.linear == still.linear && still_shutter.display == still.display);
-    drop((frame, still_shutter, still));
+    drop((still_shutter, still));
     gpu.finish().unwrap();
 }
 

@@ -66,9 +66,9 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint indirect;            // 1: paths also go on by the diffuse lobe (diffuse interreflection, Kajiya 1986)
     uint direct_light;        // how direct light is estimated: DIRECT_MIS, DIRECT_LIGHT_SAMPLING, DIRECT_BSDF_SAMPLING
     uint alpha_moment;        // 1: alpha accumulates each sample's squared luminance instead of coverage
+    uint sabotage;            // SABOTAGE_* bits: strata check's canaries break the render on purpose; 0 otherwise
     uint pad_end0;  // to the Rust struct's 16-byte multiple
     uint pad_end1;
-    uint pad_end2;
 } pc;
 
 // The direct-light estimators (render::frame::DirectLight): light sampling and BSDF sampling combined by

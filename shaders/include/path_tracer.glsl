@@ -65,7 +65,7 @@ vec3 offset_origin(vec3 p, vec3 ng, vec3 dir) {
 }
 
 bool occluded(vec3 o, vec3 d, float t_max) {
-    if (t_max <= 0.0) return false;
+    if (t_max <= 0.0 || (pc.sabotage & SABOTAGE_NO_SHADOW_RAYS) != 0u) return false;
     log_ray(gl_RayFlagsTerminateOnFirstHitEXT, o, 0.0, d, t_max);
     return trace_occluded(o, d, t_max);
 }
@@ -338,6 +338,7 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
 
 // The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
 vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
+    if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
     vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
     r.throughput = vec3(1.0);
     chain = next_chain_ray(s, v, 0u, r);

@@ -24,6 +24,9 @@ const uint COUNTER_SHADOW_RAYS = 0u;
 const uint COUNTER_SECONDARY_RAYS = 1u;
 const uint COUNTER_NEXT_TILE = 2u;
 const uint COUNTERS_PER_SLOT = 3u;
+// The accumulation pass's sabotage bits (pc.sabotage; render::frame::Sabotage): strata check's canaries.
+const uint SABOTAGE_NO_SHADOW_RAYS = 1u;
+const uint SABOTAGE_FLIPPED_NORMALS = 2u;
 
 // The G-buffer pass's descriptor bindings (gbuffer_layout.glsl, gbuffer.frag; render::gbuffer::GBufferPass).
 const uint GBUFFER_BINDING_DRAWS = 0u;

@@ -35,6 +35,66 @@ pub struct BenchArgs {
 }
 
 #[derive(Args)]
+pub struct CheckArgs {
+    /// Check this device: its index in `strata info`, or part of its name.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+    /// How the cases trace rays: query, pipeline, or auto (ray queries where the device has them).
+    #[arg(long, value_name = "HOW", default_value = "auto", value_parser = parse_trace)]
+    pub trace: strata::scene::settings::Trace,
+    /// Where the reports go: results.csv, failures.csv, results.json, summary.md, report.html, and a directory
+    /// per case with its pictures and log.
+    #[arg(long, value_name = "DIR", default_value = "check-report")]
+    pub out: PathBuf,
+    /// Only the cases whose names match this regular expression (e.g. 'golden/' or '^optics/penumbra$').
+    #[arg(long, value_name = "REGEX")]
+    pub cases: Option<String>,
+    /// What this device is known to do: a TOML file of [[expect]] and [[allow]] entries (docs/check.md), or the
+    /// failures.csv of an earlier run as a baseline. A listed failure passes the run as ExpectedFail; a listed
+    /// case that passes is an UnexpectedPass.
+    #[arg(long, value_name = "FILE")]
+    pub expectations: Option<PathBuf>,
+    /// Also write JUnit XML here (device, driver, Vulkan API, layer and strata versions as properties).
+    #[arg(long, value_name = "FILE")]
+    pub junit: Option<PathBuf>,
+    /// Cases run side by side, each in its own process.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub jobs: u32,
+    /// Run every Nth case from the Kth (K in 1..=N): one shard of a CI matrix.
+    #[arg(long, value_name = "K/N", value_parser = parse_fraction)]
+    pub fraction: Option<(usize, usize)>,
+    /// A short suite (under 30 s on a 2-core lavapipe machine): a few cases of each kind, and the canaries.
+    #[arg(long)]
+    pub quick: bool,
+    /// Make the outputs of the golden and AOV cases the new goldens (the old files are kept as .old), for the
+    /// device this runs on. Needs a goldens directory: the repository's check/goldens, or --goldens DIR.
+    #[arg(long)]
+    pub bless: bool,
+    /// Render each golden case at other seeds and set its perceptual thresholds from the spread measured, with
+    /// a margin (written to the goldens' goldens.toml).
+    #[arg(long)]
+    pub calibrate: bool,
+    /// The goldens directory [default: the repository's check/goldens when this binary was built in it, else
+    /// the copy embedded in the binary].
+    #[arg(long, value_name = "DIR")]
+    pub goldens: Option<PathBuf>,
+    /// Seconds a case may run before it is killed and reported as Timeout.
+    #[arg(long, value_name = "SECONDS", default_value_t = 300, value_parser = clap::value_parser!(u64).range(1..=86400))]
+    pub timeout: u64,
+    /// List the cases (with --quick and --cases applied) and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Run one case in this process and write its result (what the suite starts each child with).
+    #[arg(long, value_name = "CASE", hide = true)]
+    pub child: Option<String>,
+    #[arg(long, hide = true, default_value_t = 1)]
+    pub attempt: u32,
+    /// Include the hidden cases that crash, hang, flake and fail on purpose (the suite's own tests).
+    #[arg(long, hide = true)]
+    pub test_cases: bool,
+}
+
+#[derive(Args)]
 pub struct GpuArgs {
     /// Run under the Khronos validation layer (synchronization validation and best practices on) and print
     /// its messages; exit non-zero if it reports any error or warning.
@@ -220,4 +280,15 @@ pub fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
         *slot = v;
     }
     Ok(rgb)
+}
+
+/// `K/N` with 1 ≤ K ≤ N.
+pub fn parse_fraction(text: &str) -> Result<(usize, usize), String> {
+    let (k, n) = text.split_once('/').ok_or_else(|| format!("{text:?}: expected K/N, e.g. 2/4"))?;
+    let k: usize = k.trim().parse().map_err(|_| format!("{text:?}: K must be a whole number"))?;
+    let n: usize = n.trim().parse().map_err(|_| format!("{text:?}: N must be a whole number"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("{text:?}: K must be 1 to N (the first shard is 1/{n})", n = n.max(1)));
+    }
+    Ok((k, n))
 }

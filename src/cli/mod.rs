@@ -1,6 +1,7 @@
 //! The commands of the `strata` binary, one file each, and what they share.
 pub mod args;
 pub mod bench;
+pub mod check;
 pub mod info;
 pub mod progress;
 pub mod render;

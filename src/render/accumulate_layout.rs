@@ -119,7 +119,9 @@ pub struct AccumulatePush {
     pub direct_light: u32,
     /// 1: the accumulation's alpha sums each sample's squared luminance instead of its coverage.
     pub alpha_moment: u32,
-    pub pad: [u32; 3],
+    /// `SABOTAGE_*` bits (shared_constants.glsl): the deliberately broken renders of `strata check`'s canaries.
+    pub sabotage: u32,
+    pub pad: [u32; 2],
 }
 
 /// `pc.direct_light`'s values (accumulate_layout.glsl): multiple importance sampling of lights and BSDF, or

@@ -78,10 +78,31 @@ pub struct FrameOptions {
     /// Make [`RenderedFrame::linear`]'s alpha the mean of each sample's squared luminance instead of coverage,
     /// so that a test can estimate each pixel's variance: Var = (E[L²] − E[L]²), over N − 1 for the mean's.
     pub luminance_moments: bool,
+    /// Break the render on purpose: only for `strata check`'s canaries, which must fail their comparisons.
+    pub sabotage: Sabotage,
     /// Bytes to move the ray-tracing pipeline's shader binding table off its alignment: only for the test that
     /// shows the validation layer catches a misaligned table. 0 in every render.
     #[doc(hidden)]
     pub misalign_shader_binding_table: u64,
+}
+
+/// Deliberate breakage of the accumulation pass, for `strata check`'s canaries: proof that its comparisons can
+/// fail. Nothing else sets it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Sabotage {
+    /// Shadow rays report every light unoccluded.
+    pub no_shadow_rays: bool,
+    /// The visible surface's shading normal points into it.
+    pub flipped_normals: bool,
+}
+
+impl Sabotage {
+    /// The push constant's `SABOTAGE_*` bits.
+    pub fn bits(self) -> u32 {
+        use crate::shaders::constants::{SABOTAGE_FLIPPED_NORMALS, SABOTAGE_NO_SHADOW_RAYS};
+        (if self.no_shadow_rays { SABOTAGE_NO_SHADOW_RAYS } else { 0 })
+            | (if self.flipped_normals { SABOTAGE_FLIPPED_NORMALS } else { 0 })
+    }
 }
 
 /// GPU time per pass summed over the frame, in milliseconds.
@@ -351,7 +372,8 @@ pub fn render_frame(
                 indirect: u32::from(settings.indirect),
                 direct_light: options.direct_light.shader_value(),
                 alpha_moment: u32::from(options.luminance_moments),
-                pad: [0; 3],
+                sabotage: options.sabotage.bits(),
+                pad: [0; 2],
             };
             samples.push((camera_sample, push));
         }
