@@ -15,6 +15,7 @@ layout(push_constant, std430) uniform ResolvePush {
     float inv_samples;
     float exposure_scale;
     uint tone_map;
+    uint transparent;  // 1: keep coverage in alpha, colour unpremultiplied (straight alpha, as PNG stores it)
 } pc;
 
 vec3 aces_fit(vec3 x) {
@@ -31,7 +32,11 @@ void main() {
     if (gl_GlobalInvocationID.x >= pc.width || gl_GlobalInvocationID.y >= pc.height) return;
     vec4 mean = imageLoad(accumulation, p) * pc.inv_samples;
     imageStore(accumulation, p, mean);
-    vec3 c = max(mean.rgb * pc.exposure_scale, vec3(0.0));
+    // With a transparent background the accumulated colour is premultiplied by coverage (samples that missed
+    // added nothing): the display divides it out, so that compositing the PNG over a background brings it back.
+    float alpha = pc.transparent != 0u ? clamp(mean.a, 0.0, 1.0) : 1.0;
+    vec3 colour = pc.transparent != 0u ? (mean.a > 0.0 ? mean.rgb / mean.a : vec3(0.0)) : mean.rgb;
+    vec3 c = max(colour * pc.exposure_scale, vec3(0.0));
     c = pc.tone_map == 1u ? aces_fit(c) : clamp(c, 0.0, 1.0);
-    imageStore(display, p, vec4(srgb_encode(c), 1.0));
+    imageStore(display, p, vec4(srgb_encode(c), alpha));
 }

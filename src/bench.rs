@@ -221,6 +221,7 @@ pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TraceP
         texture_count: 1,
         primary_rays: false,
         alpha_tested: true,
+        environment: false,
         launch: AccumulateLaunch::DeviceDefault,
         table_shift: 0,
     };

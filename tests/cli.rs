@@ -507,3 +507,186 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
         assert!(token.parse::<f64>().is_ok_and(f64::is_finite), "{label} in {scaling:?}");
     }
 }
+
+#[test]
+fn an_environment_and_a_transparent_background_from_the_command_line() {
+    let dir = temp_dir("environment");
+    let png = dir.join("thumb.png");
+    let box_gltf = samples().join("Box.gltf");
+    let args = |extra: &[&'static str]| -> Vec<String> {
+        let base = ["render", box_gltf.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "48x48", "--spp", "4"];
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let strata = |a: Vec<String>| strata(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let out = strata(args(&["--environment", "studio", "--background", "transparent", "--validate", "--quiet"]));
+    assert!(out.status.success(), "{}", outcome(&out));
+    let image = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(image.get_pixel(0, 0)[3], 0, "nothing covers the corner");
+    assert_eq!(image.get_pixel(24, 24)[3], 255, "the box covers the centre");
+    assert!(!stderr(&out).contains("default key light"), "the environment lights the scene");
+    std::fs::remove_file(&png).unwrap();
+    for (extra, says) in [
+        (vec!["--environment", "nope.hdr"], "nope.hdr: no such file"),
+        (vec!["--background", "environment"], "--background environment needs an environment"),
+        (vec!["--environment-rotation", "90"], "need an environment"),
+        (vec!["--background", "sky"], "or say environment or transparent"),
+    ] {
+        let out = strata(args(&extra));
+        assert!(!out.status.success(), "{extra:?} must fail");
+        assert!(stderr(&out).contains(says), "{extra:?}: {}", stderr(&out));
+        assert!(!png.exists(), "{extra:?} wrote a file");
+    }
+}
+
+/// Runs strata with owned arguments.
+fn strata_owned(args: &[String]) -> Output {
+    strata(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+#[test]
+fn turntables_and_animation_frames_write_their_sequences_and_equal_single_renders() {
+    let dir = temp_dir("sequences");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let run = |scene: &str, extra: &[&str], out: &str| {
+        let mut args: Vec<String> =
+            ["render", scene, "--size", "40x30", "--spp", "2", "--quiet", "-o"].iter().map(|s| s.to_string()).collect();
+        args.push(path(out));
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let out = strata_owned(&args);
+        assert!(out.status.success(), "{args:?}: {}", outcome(&out));
+    };
+    let textured = samples().join("BoxTextured.gltf");
+    let textured = textured.to_str().unwrap();
+    // A turntable's first view is the orbit render at its azimuth, bit for bit; `#`s set the digits.
+    run(textured, &["--turntable", "3", "--orbit", "30,20", "--environment", "studio"], "turn.##.exr");
+    run(textured, &["--orbit", "30,20", "--environment", "studio"], "orbit.exr");
+    for k in 1..=3 {
+        assert!(dir.join(format!("turn.{k:02}.exr")).is_file(), "view {k}");
+    }
+    assert_eq!(std::fs::read(dir.join("turn.01.exr")).unwrap(), std::fs::read(dir.join("orbit.exr")).unwrap());
+    assert_ne!(std::fs::read(dir.join("turn.02.exr")).unwrap(), std::fs::read(dir.join("orbit.exr")).unwrap());
+    // Frame k of --frames is the --time render of k / fps, bit for bit, with the same shutter.
+    let animated = samples().join("BoxAnimated.gltf");
+    let animated = animated.to_str().unwrap();
+    run(animated, &["--frames", "10..12", "--fps", "25"], "anim.exr");
+    run(animated, &["--time", "0.44", "--fps", "25"], "at.exr");
+    for k in 10..=12 {
+        assert!(dir.join(format!("anim.{k:04}.exr")).is_file(), "frame {k}");
+    }
+    assert_eq!(std::fs::read(dir.join("anim.0011.exr")).unwrap(), std::fs::read(dir.join("at.exr")).unwrap());
+    assert_ne!(std::fs::read(dir.join("anim.0010.exr")).unwrap(), std::fs::read(dir.join("at.exr")).unwrap());
+    // Conflicting or absurd requests fail before anything is written.
+    for (extra, says) in [
+        (vec!["--frames", "5..2"], "the last frame 2 comes before the first 5"),
+        (vec!["--time", "1", "--turntable", "4"], "give one of them"),
+        (vec!["--frames", "1..2", "--shutter", "0:0.1"], "use --shutter-angle"),
+        (vec!["--orbit", "10,95"], "between -90 and 90"),
+        (vec!["--shutter-angle", "400", "--time", "0"], "from 0 to 360"),
+    ] {
+        let mut args: Vec<String> = ["render", animated, "-o"].iter().map(|s| s.to_string()).collect();
+        args.push(path("bad.png"));
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let out = strata_owned(&args);
+        assert!(!out.status.success(), "{extra:?} must fail");
+        assert!(stderr(&out).contains(says), "{extra:?}: {}", stderr(&out));
+    }
+    assert!(!std::fs::read_dir(&dir).unwrap().any(|e| e.unwrap().file_name().to_string_lossy().starts_with("bad")));
+}
+
+#[test]
+fn every_sample_model_without_a_camera_fits_the_image_with_the_default_camera() {
+    let dir = temp_dir("framing");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(samples()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "gltf") || strata::load_scene(&path).unwrap().camera.is_some() {
+            continue;
+        }
+        for (w, h) in [(48u32, 32u32), (32, 48)] {
+            let png = dir.join(format!("{}-{w}x{h}.png", path.file_stem().unwrap().to_string_lossy()));
+            let out = strata(&[
+                "render",
+                path.to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+                "--size",
+                &format!("{w}x{h}"),
+                "--spp",
+                "1",
+                "--background",
+                "transparent",
+                "--quiet",
+            ]);
+            assert!(out.status.success(), "{}: {}", path.display(), outcome(&out));
+            let image = image::open(&png).unwrap().to_rgba8();
+            let border = (0..w).flat_map(|x| [(x, 0), (x, h - 1)]).chain((0..h).flat_map(|y| [(0, y), (w - 1, y)]));
+            let touching: Vec<(u32, u32)> = border.filter(|&(x, y)| image.get_pixel(x, y)[3] > 0).collect();
+            assert!(touching.is_empty(), "{} at {w}x{h} touches the image's edge at {touching:?}", path.display());
+            let covered = image.pixels().filter(|p| p[3] > 0).count();
+            assert!(covered > (w * h / 20) as usize, "{} at {w}x{h} covers only {covered} pixels", path.display());
+        }
+        checked += 1;
+    }
+    assert!(checked >= 8, "only {checked} samples have no camera");
+}
+
+#[test]
+fn auto_exposure_maps_the_log_average_to_middle_grey_whatever_the_light_level() {
+    let dir = temp_dir("auto-exposure");
+    let box_gltf = samples().join("Box.gltf");
+    let render = |intensity: &str, name: &str| {
+        let png = dir.join(format!("{name}.png"));
+        let exr = dir.join(format!("{name}.exr"));
+        let out = strata(&[
+            "render",
+            box_gltf.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--exr",
+            exr.to_str().unwrap(),
+            "--size",
+            "40x30",
+            "--spp",
+            "4",
+            "--environment",
+            "studio",
+            "--environment-intensity",
+            intensity,
+            "--exposure",
+            "auto",
+            "--json",
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{}", outcome(&out));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(json["auto_exposure"], true);
+        (json["exposure"].as_f64().unwrap() as f32, image::open(&png).unwrap().to_rgba8(), exr)
+    };
+    let (dim_ev, dim_png, dim_exr) = render("1", "dim");
+    let (bright_ev, bright_png, _) = render("1024", "bright");
+    // The exposure is log2(0.18 / exp(mean ln(1e-4 + L))) over the linear picture.
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        &dim_exr,
+        |size, _| vec![[0f32; 4]; size.width() * size.height()],
+        |pixels: &mut Vec<[f32; 4]>, position, (r, g, b, a): (f32, f32, f32, f32)| {
+            pixels[position.y() * 40 + position.x()] = [r, g, b, a];
+        },
+    )
+    .unwrap();
+    let pixels = &image.layer_data.channel_data.pixels;
+    let mean_log = pixels
+        .iter()
+        .map(|p| (1e-4 + 0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])).ln())
+        .sum::<f64>()
+        / pixels.len() as f64;
+    let expected = (0.18 / mean_log.exp()).log2() as f32;
+    assert!((dim_ev - expected).abs() < 1e-3, "auto exposure {dim_ev}, the log-average asks for {expected}");
+    // 1024 times the light: 10 stops less exposure, and the same picture.
+    assert!((dim_ev - bright_ev - 10.0).abs() < 0.01, "{dim_ev} and {bright_ev}");
+    let differing = dim_png
+        .pixels()
+        .zip(bright_png.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0.iter()).any(|(x, y)| x.abs_diff(*y) > 1))
+        .count();
+    assert_eq!(differing, 0, "the exposed pictures differ at {differing} pixels");
+}

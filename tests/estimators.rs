@@ -430,6 +430,16 @@ fn estimators_agree_on_every_material_and_light() {
         }
         cases.push((name.into(), scene));
     }
+    // The environment: a light sampled by its luminance distribution and found by escaping rays, alone over a
+    // glossy floor and beside a quad light (selection between them by power).
+    for (name, with_quad) in [("studio environment", false), ("studio environment and a quad light", true)] {
+        let mut scene = stage(glossy(0.3));
+        scene.environment = Some(strata::scene::environment::Environment::studio(128, 64));
+        if with_quad {
+            quad_over(&mut scene);
+        }
+        cases.push((name.into(), scene));
+    }
     // Bounces 0 and 1: the light sample at a path's last vertex is all there is of its direct light.
     let cases = cases
         .into_iter()

@@ -270,3 +270,28 @@ fn a_morph_target_of_the_wrong_length_is_an_error() {
     let error = format!("{:#}", strata::load_scene(&path).unwrap_err());
     assert!(error.contains("mesh 0") && error.contains("morph target 0 POSITION"), "{error}");
 }
+
+/// Kenney's models (and other exporters) list a child among the scene's root nodes, against glTF 2.0 §3.5.2; every
+/// viewer draws them. strata warns and keeps the hierarchy: the child is drawn once, where its parent puts it.
+#[test]
+fn a_child_listed_as_a_scene_root_is_drawn_once_as_a_child_with_a_warning() {
+    let bin = buffer();
+    let mut doc = document(json!({"byteLength": bin.len()}));
+    // Node 2 holds node 0 (the mesh), moved up by 5; the scene lists both.
+    doc["nodes"].as_array_mut().unwrap().push(json!({"name": "holder", "translation": [0, 5, 0], "children": [0]}));
+    doc["scenes"] = json!([{"nodes": [2, 0, 1]}]);
+    let path = temp_dir("listed-child").join("listed.glb");
+    std::fs::write(&path, glb(&doc, &bin)).unwrap();
+    let scene = strata::load_scene(&path).unwrap();
+    assert_eq!(scene.instances.len(), 1, "the mesh is drawn once");
+    assert_eq!(scene.instances[0].world_from_object.w_axis.y, 5.0, "as a child of its holder");
+    assert_eq!(scene.roots, vec![2, 1]);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("scene node 0") && w.contains("child of node 2") && w.contains("§3.5.2")),
+        "{:?}",
+        scene.warnings
+    );
+}

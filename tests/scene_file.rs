@@ -158,3 +158,41 @@ fn every_example_in_the_format_document_loads() {
             .unwrap_or_else(|e| panic!("example {i} does not load: {e:#}\n{block}"));
     }
 }
+
+#[test]
+fn the_environment_table_and_background_words_land_where_the_renderer_reads_them() {
+    use strata::scene::settings::Backdrop;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = std::env::temp_dir().join(format!("strata-environment-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gltf = root.join("scenes/showcase.gltf");
+    let write = |name: &str, body: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, format!("gltf = {:?}\n{body}", gltf.to_str().unwrap())).unwrap();
+        path
+    };
+    let path = write(
+        "env.toml",
+        "[environment]\nbuiltin = \"studio\"\nrotation_degrees = -45.0\nintensity = 2.0\n[render]\nbackground = \"transparent\"\n",
+    );
+    let loaded = strata::load(&path, &Default::default()).unwrap();
+    let e = loaded.scene.environment.as_ref().expect("an environment");
+    assert_eq!((e.rotation_degrees, e.intensity), (-45.0, 2.0));
+    assert_eq!(loaded.settings.backdrop, Some(Backdrop::Transparent));
+    let path = write("colour.toml", "[render]\nbackground = [0.1, 0.2, 0.3]\n");
+    let loaded = strata::load(&path, &Default::default()).unwrap();
+    assert_eq!(loaded.settings.background, Some(glam::Vec3::new(0.1, 0.2, 0.3)));
+    assert!(loaded.scene.environment.is_none());
+    for (body, says) in [
+        ("[environment]\nbuiltin = \"forest\"\n", ":3:11: unknown builtin environment \"forest\""),
+        ("[environment]\nfile = \"missing.hdr\"\n", ":3:8: "),
+        ("[environment]\nintensity = 2.0\n", "[environment] needs one of file"),
+        ("[environment]\nbuiltin = \"studio\"\nintensity = -1.0\n", ":4:13: intensity = -1 is out of range"),
+        ("[render]\nbackground = \"sky\"\n", ":3:14: background must be [r, g, b]"),
+        ("[render]\nbackground = [1.0, -1.0, 0.0]\n", ":3:14: background must be"),
+    ] {
+        let path = write("bad.toml", body);
+        let err = format!("{:#}", strata::load(&path, &Default::default()).unwrap_err());
+        assert!(err.contains(says) && err.contains("bad.toml"), "{body:?}: {err}");
+    }
+}

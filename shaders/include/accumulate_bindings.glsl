@@ -10,6 +10,10 @@ layout(constant_id = 0) const uint PRIMARY_RAYS = 0u;
 // 1: some geometry is alpha-tested (glTF MASK or BLEND) and built non-opaque, so ray queries stop at its
 // candidate triangles to test them; 0: every ray is forced opaque and the pipeline holds no alpha test.
 layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
+// 1: the scene has an environment (environment.glsl); 0: none, and the pipeline holds none of its code (a
+// larger shader costs lavapipe pipeline-creation time and registers even where the code never runs).
+// constant_id 2 is accumulate.rgen's PIXEL_RUNS.
+layout(constant_id = 3) const uint HAS_ENVIRONMENT = 0u;
 // The flags every ray starts with, besides its own: with no alpha-tested geometry every ray is opaque and the
 // alpha test is never reached.
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
@@ -25,6 +29,15 @@ layout(set = 0, binding = ACCUMULATE_BINDING_PRIMITIVES, std430) readonly buffer
 layout(set = 0, binding = ACCUMULATE_BINDING_TEXTURES) uniform sampler2D textures[];
 layout(set = 0, binding = ACCUMULATE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_CAMERAS, std430) readonly buffer Cameras { GpuCamera cameras[]; };
+// The environment (environment.glsl; src/render/environment.rs): a header, then texels and the sampling CDFs.
+layout(set = 0, binding = ACCUMULATE_BINDING_ENVIRONMENT, std430) readonly buffer Environment {
+    uint env_width;
+    uint env_height;
+    uint env_present;  // 0: no environment (the header alone)
+    uint env_uniform;  // 1: sample directions uniformly over the sphere instead (for the tests' comparison)
+    vec4 env_params;   // cos and sin of the rotation about +Y, intensity, unused
+    float env_data[];
+};
 
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec3Array { vec3 v[]; };
 layout(buffer_reference, scalar, buffer_reference_align = 4) readonly buffer Vec2Array { vec2 v[]; };

@@ -14,6 +14,7 @@ const uint ACCUMULATE_BINDING_PRIMITIVES = 6u;
 const uint ACCUMULATE_BINDING_TEXTURES = 7u;
 const uint ACCUMULATE_BINDING_COUNTERS = 8u;
 const uint ACCUMULATE_BINDING_CAMERAS = 9u;
+const uint ACCUMULATE_BINDING_ENVIRONMENT = 10u;
 // The side of the accumulation compute shader's square workgroup: one tile of its tile queue.
 const uint ACCUMULATE_TILE_SIZE = 8u;
 // The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device
@@ -24,6 +25,11 @@ const uint COUNTER_SHADOW_RAYS = 0u;
 const uint COUNTER_SECONDARY_RAYS = 1u;
 const uint COUNTER_NEXT_TILE = 2u;
 const uint COUNTERS_PER_SLOT = 3u;
+// What pixels no surface covers show (pc.background.w; render::frame): the background colour, the environment,
+// or nothing (alpha 0, no radiance).
+const uint BACKGROUND_COLOUR = 0u;
+const uint BACKGROUND_ENVIRONMENT = 1u;
+const uint BACKGROUND_TRANSPARENT = 2u;
 // The accumulation pass's sabotage bits (pc.sabotage; render::frame::Sabotage): strata check's canaries.
 const uint SABOTAGE_NO_SHADOW_RAYS = 1u;
 const uint SABOTAGE_FLIPPED_NORMALS = 2u;

@@ -143,9 +143,18 @@ pub struct RenderArgs {
     /// [default: the scene file's, else 0:0].
     #[arg(long, value_name = "OPEN:CLOSE", value_parser = parse_shutter)]
     pub shutter: Option<(f32, f32)>,
-    /// Exposure in stops: the PNG's radiance is scaled by 2^EV before tone mapping [default: 0].
-    #[arg(long, value_name = "EV", allow_hyphen_values = true)]
-    pub exposure: Option<f32>,
+    /// Exposure in stops: the PNG's radiance is scaled by 2^EV before tone mapping; or `auto`, which maps the
+    /// picture's log-average luminance to middle grey (0.18, as photographic tone reproduction does) and prints
+    /// the value it chose (also in --json). The default, 0, shows radiance as it is: right for scenes made in
+    /// relative units (strata's own), too bright for glTF lights in physical units (a 6830-lux sun) [default:
+    /// the scene file's, else 0].
+    #[arg(long, value_name = "EV|auto", allow_hyphen_values = true, value_parser = parse_exposure, conflicts_with = "ev100")]
+    pub exposure: Option<ExposureArg>,
+    /// Photographic exposure value at ISO 100 (sunny day 15, overcast 12, indoors 7): radiance × 1 / (1.2 × 2^EV100),
+    /// the saturation-based exposure physically based renderers use (Lagarde and de Rousiers, "Moving Frostbite
+    /// to PBR", 2014). For glTF scenes whose lights are in physical units.
+    #[arg(long, value_name = "EV100", allow_hyphen_values = true, value_parser = parse_finite)]
+    pub ev100: Option<f32>,
     /// Tone map for the PNG: clamp (none), or filmic (an ACES fit) [default: the scene file's, else filmic].
     #[arg(long, value_name = "NAME", value_parser = parse_tone_map)]
     pub tone_map: Option<strata::scene::settings::ToneMap>,
@@ -174,15 +183,62 @@ pub struct RenderArgs {
     /// direct light alone; 3 sees through a glass sphere [default: the scene file's, else 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     pub bounces: Option<u32>,
-    /// Linear RGB background colour of pixels no surface covers, as R,G,B [default: the scene file's, else
-    /// 0.02,0.02,0.025].
-    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
-    pub background: Option<[f32; 3]>,
+    /// What pixels no surface covers show: a linear RGB colour R,G,B (also what escaping rays see without an
+    /// environment), environment (the --environment as the camera sees it), or transparent (alpha 0: the PNG
+    /// is RGBA with straight alpha, the EXR premultiplied; the scene is lit as before) [default: the scene
+    /// file's, else the environment when there is one, else 0.02,0.02,0.025].
+    #[arg(long, value_name = "R,G,B|environment|transparent", value_parser = parse_background)]
+    pub background: Option<BackgroundArg>,
+    /// Light the scene with an environment: an equirectangular (latitude-longitude) Radiance .hdr or OpenEXR
+    /// image, or `studio` for a generated one (soft dome, warm key, cool fill). It is importance-sampled like any
+    /// light (with MIS against the BSDF) and is what escaping rays see; its centre column faces -Z [default:
+    /// the scene file's [environment], else none].
+    #[arg(long, value_name = "FILE|studio")]
+    pub environment: Option<PathBuf>,
+    /// Turn the environment about +Y by this many degrees (counter-clockwise seen from above).
+    #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_finite)]
+    pub environment_rotation: Option<f32>,
+    /// Scale the environment's radiance.
+    #[arg(long, value_name = "X", value_parser = parse_non_negative)]
+    pub environment_intensity: Option<f32>,
     /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
     /// emission, material. With an .exr they are layers of the EXR (raw values); with -o x.png each is a PNG
     /// beside it, x.<name>.png (normals as ½+½n, depth and height scaled to their range).
     #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
     pub aov: Option<AovList>,
+    /// Look from an orbit around the scene (or --target): azimuth THETA about +Y in degrees from +Z towards +X
+    /// (0 looks along -Z), elevation PHI above the horizontal, and the DISTANCE in metres [default distance: far
+    /// enough that the whole scene fits the image with a 10% margin]. Replaces the scene's camera.
+    #[arg(long, value_name = "THETA,PHI[,DISTANCE]", value_parser = parse_orbit, allow_hyphen_values = true)]
+    pub orbit: Option<Orbit>,
+    /// The point the camera looks at (with --orbit or --turntable, or alone: the default orbit around it)
+    /// [default: the centre of the scene's bounds].
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, allow_hyphen_values = true)]
+    pub target: Option<[f32; 3]>,
+    /// Vertical field of view in degrees of the (perspective) camera [default: the scene camera's; 45 for a camera
+    /// strata places].
+    #[arg(long, value_name = "DEGREES", value_parser = parse_yfov)]
+    pub yfov: Option<f32>,
+    /// Render N views around +Y (a turntable): the orbit's azimuth steps by 360/N degrees from --orbit's (or 0),
+    /// written as -o's name with the view's number, 1 to N (thumb.png: thumb.0001.png ...; a run of # in -o
+    /// sets the digits: thumb.##.png). One device, one upload, one set of pipelines for all of them.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub turntable: Option<u32>,
+    /// Render the frames A to B (inclusive) of the scene's animation, frame k at time k / --fps, each with its
+    /// own shutter (--shutter-angle), written as -o's name with the frame's number.
+    #[arg(long, value_name = "A..B", value_parser = parse_frames)]
+    pub frames: Option<(u32, u32)>,
+    /// Frames per second of --frames and --time.
+    #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = parse_positive)]
+    pub fps: f32,
+    /// Render one frame at time T seconds of the animation (its shutter as --shutter-angle says): the same picture
+    /// as the frame of --frames at that time.
+    #[arg(long, value_name = "T", value_parser = parse_finite, allow_hyphen_values = true)]
+    pub time: Option<f32>,
+    /// The shutter of --frames and --time as a fraction of a frame, in degrees: 180 opens it for half a frame
+    /// (film's usual motion blur), 0 is a still frame.
+    #[arg(long, value_name = "DEGREES", default_value_t = 180.0, value_parser = parse_shutter_angle)]
+    pub shutter_angle: f32,
     /// Render the fast raster preview (one sample, simple shading, no ray queries) instead.
     #[arg(long)]
     pub preview: bool,
@@ -282,6 +338,29 @@ pub fn parse_rgb(text: &str) -> Result<[f32; 3], String> {
     Ok(rgb)
 }
 
+/// What `--background` says.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BackgroundArg {
+    Colour([f32; 3]),
+    Environment,
+    Transparent,
+}
+
+pub fn parse_background(text: &str) -> Result<BackgroundArg, String> {
+    match text {
+        "environment" => Ok(BackgroundArg::Environment),
+        "transparent" => Ok(BackgroundArg::Transparent),
+        _ => parse_rgb(text).map(BackgroundArg::Colour).map_err(|e| format!("{e}; or say environment or transparent")),
+    }
+}
+
+pub fn parse_finite(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("\"{text}\" is not a finite number")),
+    }
+}
+
 /// `K/N` with 1 ≤ K ≤ N.
 pub fn parse_fraction(text: &str) -> Result<(usize, usize), String> {
     let (k, n) = text.split_once('/').ok_or_else(|| format!("{text:?}: expected K/N, e.g. 2/4"))?;
@@ -291,4 +370,106 @@ pub fn parse_fraction(text: &str) -> Result<(usize, usize), String> {
         return Err(format!("{text:?}: K must be 1 to N (the first shard is 1/{n})", n = n.max(1)));
     }
     Ok((k, n))
+}
+
+pub use strata::scene::camera::Orbit;
+
+/// `THETA,PHI` or `THETA,PHI,DISTANCE` (degrees, degrees, metres).
+pub fn parse_orbit(text: &str) -> Result<Orbit, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if !(2..=3).contains(&parts.len()) {
+        return Err(format!("\"{text}\" is not THETA,PHI or THETA,PHI,DISTANCE"));
+    }
+    let number = |s: &str| -> Result<f32, String> {
+        s.parse::<f32>().ok().filter(|v| v.is_finite()).ok_or_else(|| format!("\"{s}\" is not a finite number"))
+    };
+    let (theta, phi) = (number(parts[0])?, number(parts[1])?);
+    if phi.abs() > 90.0 {
+        return Err(format!("the elevation {phi} must be between -90 and 90 degrees"));
+    }
+    let distance = match parts.get(2) {
+        Some(d) => {
+            let d = number(d)?;
+            if d <= 0.0 {
+                return Err(format!("the distance {d} must be more than 0 metres"));
+            }
+            Some(d)
+        }
+        None => None,
+    };
+    Ok(Orbit { theta_degrees: theta, phi_degrees: phi, distance })
+}
+
+/// `X,Y,Z`, finite.
+pub fn parse_point(text: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("\"{text}\" is not X,Y,Z"));
+    }
+    let mut p = [0.0; 3];
+    for (slot, part) in p.iter_mut().zip(parts) {
+        *slot = part
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("\"{part}\" is not a finite number"))?;
+    }
+    Ok(p)
+}
+
+pub fn parse_yfov(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v > 0.0 && v < 180.0 => Ok(v),
+        _ => Err(format!("\"{text}\" is not a field of view between 0 and 180 degrees")),
+    }
+}
+
+pub fn parse_positive(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("\"{text}\" is not a number above 0")),
+    }
+}
+
+pub fn parse_shutter_angle(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if (0.0..=360.0).contains(&v) => Ok(v),
+        _ => Err(format!("\"{text}\" is not a shutter angle from 0 to 360 degrees")),
+    }
+}
+
+/// `A..B` with A ≤ B (frame numbers, inclusive).
+pub fn parse_frames(text: &str) -> Result<(u32, u32), String> {
+    let (a, b) = text.split_once("..").ok_or_else(|| format!("\"{text}\" is not A..B, e.g. 1..48"))?;
+    let frame = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("\"{s}\" is not a frame number"));
+    let (a, b) = (frame(a)?, frame(b)?);
+    if b < a {
+        return Err(format!("the last frame {b} comes before the first {a}"));
+    }
+    if b - a >= 100_000 {
+        return Err(format!("{} frames is more than one run renders (100000)", b - a + 1));
+    }
+    Ok((a, b))
+}
+
+/// What `--exposure` says.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ExposureArg {
+    Stops(f32),
+    Auto,
+}
+
+pub fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
+    if text == "auto" {
+        return Ok(ExposureArg::Auto);
+    }
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= 64.0 => Ok(ExposureArg::Stops(v)),
+        _ => Err(format!("\"{text}\" is not a number of stops between -64 and 64, or auto")),
+    }
+}
+
+/// The exposure in stops of a photographic EV100: 1 / (1.2 × 2^EV100).
+pub fn ev100_stops(ev100: f32) -> f32 {
+    -(1.2f32.log2()) - ev100
 }

@@ -5,6 +5,7 @@ pub mod check;
 pub mod info;
 pub mod progress;
 pub mod render;
+pub mod sequence;
 pub mod summary;
 
 /// Prints to stdout; a closed pipe (`strata info | head`) is not an error.

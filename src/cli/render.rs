@@ -1,9 +1,11 @@
 //! `strata render`: load, render, write atomically, summarize.
-use super::args::RenderArgs;
+use super::args::{BackgroundArg, ExposureArg, Orbit, RenderArgs};
 use super::print_stdout;
 use super::progress::ProgressBar;
+use super::sequence;
 use super::summary::Summary;
 use anyhow::{anyhow, bail, Context as _, Result};
+use strata::scene::settings::Backdrop;
 use strata::vk::{Gpu, GpuOptions};
 
 /// Set by Ctrl-C: the sample loop stops after the batch in flight; a second Ctrl-C exits at once (nothing has
@@ -35,8 +37,20 @@ pub fn render(args: RenderArgs) -> Result<()> {
         spp: args.spp,
         sampler: args.sampler,
         seed: args.seed,
-        background: args.background.map(glam::Vec3::from_array),
-        exposure: args.exposure,
+        background: match args.background {
+            Some(BackgroundArg::Colour(rgb)) => Some(glam::Vec3::from_array(rgb)),
+            _ => None,
+        },
+        backdrop: args.background.map(|b| match b {
+            BackgroundArg::Colour(_) => Backdrop::Colour,
+            BackgroundArg::Environment => Backdrop::Environment,
+            BackgroundArg::Transparent => Backdrop::Transparent,
+        }),
+        exposure: match (args.exposure, args.ev100) {
+            (Some(ExposureArg::Stops(ev)), _) => Some(ev),
+            (_, Some(ev100)) => Some(super::args::ev100_stops(ev100)),
+            _ => None,
+        },
         tone_map: args.tone_map,
         primary: args.primary,
         indirect: if args.indirect { Some(true) } else { args.no_indirect.then_some(false) },
@@ -44,13 +58,9 @@ pub fn render(args: RenderArgs) -> Result<()> {
         trace: args.trace,
         output: args.output.clone(),
     };
-    if let Some(ev) = args.exposure {
-        if !ev.is_finite() || ev.abs() > 64.0 {
-            bail!("--exposure {ev}: give a number of stops between -64 and 64");
-        }
-    }
     // Defaults, then the scene file, then the command line.
-    let settings = strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&cli);
+    let mut settings = strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&cli);
+    settings.auto_exposure = args.exposure == Some(ExposureArg::Auto);
     let output = settings
         .output
         .clone()
@@ -64,14 +74,40 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
         strata::output::check_output_directory(exr)?;
     }
+    let sequence = sequence_of(&args)?;
     let mut scene = loaded.scene;
+    if let Some(path) = &args.environment {
+        scene.environment = Some(if path.as_os_str() == "studio" {
+            strata::scene::environment::Environment::studio(512, 256)
+        } else {
+            strata::scene::environment::Environment::load(path)?
+        });
+    }
+    if let Some(environment) = &mut scene.environment {
+        if let Some(r) = args.environment_rotation {
+            environment.rotation_degrees = r;
+        }
+        if let Some(i) = args.environment_intensity {
+            environment.intensity = i;
+        }
+    } else if args.environment_rotation.is_some() || args.environment_intensity.is_some() {
+        bail!("--environment-rotation and --environment-intensity need an environment (--environment FILE)");
+    }
+    if settings.backdrop == Some(Backdrop::Environment) && scene.environment.is_none() {
+        bail!("--background environment needs an environment (--environment FILE, or [environment] in the scene file)");
+    }
     if !args.preview && !scene.has_light() {
         scene.add_default_light();
         eprintln!(
             "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
-             (add [[light]] tables in a scene file, see docs/scene-format.md)",
+             (add [[light]] tables in a scene file, or --environment, see docs/scene-format.md)",
             args.scene.display()
         );
+    }
+    let framing = Framing::of(&args, &scene, settings.width as f32 / settings.height as f32)?;
+    match framing.camera(None) {
+        Some(camera) => scene.camera = Some(camera),
+        None => apply_yfov(&mut scene, args.yfov),
     }
     strata::scene::settings::CameraOverrides {
         aperture_radius: args.aperture,
@@ -80,6 +116,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
     }
     .apply(&mut scene)
     .with_context(|| format!("{}: applying the command line's camera options", args.scene.display()))?;
+    let lens = scene.camera.as_ref().map(|c| c.lens);
+    let plans = sequence::plan(sequence, args.fps, args.shutter_angle);
     let started = std::time::Instant::now();
     let gpu = Gpu::new(&GpuOptions {
         validation: args.gpu.validate,
@@ -88,47 +126,222 @@ pub fn render(args: RenderArgs) -> Result<()> {
         needs: strata::render::accumulate::TracePath::device_needs(settings.trace),
     })?;
     let log = gpu.validation_log();
-    // Geometry and textures go up once for every pass of this render.
+    // Geometry, textures and the environment go up once for every frame and pass of this run.
     let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
     let show_progress = !args.quiet && std::io::stderr().is_terminal();
-    let mut bar = ProgressBar::new(show_progress);
-    let picture = if args.preview {
-        let preview = strata::render::PreviewSettings {
-            width: settings.width,
-            height: settings.height,
-            background: settings.background.to_array(),
+    let mut finished: Vec<String> = Vec::new();
+    for (k, plan) in plans.iter().enumerate() {
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            return interrupted(finished, plans.len(), on_gpu, gpu);
+        }
+        // This frame's camera and shutter; everything else stays as uploaded.
+        if let Some(camera) = framing.camera(plan.theta_degrees) {
+            scene.camera = Some(strata::scene::Camera { lens: lens.unwrap_or(camera.lens), ..camera });
+        }
+        if let Some(shutter) = plan.shutter {
+            scene.shutter = shutter;
+        }
+        let (output, exr) = match plan.number {
+            Some(n) => (sequence::numbered(&output, n), args.exr.as_ref().map(|e| sequence::numbered(e, n))),
+            None => (output.clone(), args.exr.clone()),
         };
-        Picture::Preview(strata::render_preview(&gpu, &scene, &on_gpu, &preview)?)
-    } else {
-        let mut progress = |done: u32, total: u32| {
-            bar.update(done, total);
-            !INTERRUPTED.load(Ordering::SeqCst)
+        if plans.len() > 1 && !args.quiet {
+            eprintln!("strata: frame {} of {} ({})", k + 1, plans.len(), output.display());
+        }
+        let frame_started = std::time::Instant::now();
+        let mut bar = ProgressBar::new(show_progress);
+        let picture = if args.preview {
+            let preview = strata::render::PreviewSettings {
+                width: settings.width,
+                height: settings.height,
+                background: settings.background.to_array(),
+            };
+            Picture::Preview(strata::render_preview(&gpu, &scene, &on_gpu, &preview)?)
+        } else {
+            let mut progress = |done: u32, total: u32| {
+                bar.update(done, total);
+                !INTERRUPTED.load(Ordering::SeqCst)
+            };
+            let frame_options = strata::render::frame::FrameOptions::default();
+            let rendered = strata::render(&gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
+            bar.finish();
+            match rendered {
+                Ok(r) => Picture::Rendered(r),
+                Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() && !finished.is_empty() => {
+                    return interrupted(finished, plans.len(), on_gpu, gpu);
+                }
+                Err(e) => return Err(e),
+            }
         };
-        let frame_options = strata::render::frame::FrameOptions::default();
-        let rendered = strata::render(&gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
-        bar.finish();
-        Picture::Rendered(rendered?)
-    };
-    let aovs = match &args.aov {
-        Some(list) => strata::render_aovs(&gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
-        None => Vec::new(),
-    };
-    let device_name = gpu.device.report.name.clone();
-    // Everything holding the device goes first, so its teardown messages arrive before the check.
+        let aovs = match &args.aov {
+            Some(list) => strata::render_aovs(&gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
+            None => Vec::new(),
+        };
+        if args.gpu.validate {
+            // What the layer said so far; teardown messages are checked once the device is gone.
+            log.check().map_err(|report| anyhow!("{report}"))?;
+        }
+        // A single frame is written after the device's teardown passed the layer; a sequence's frames as they
+        // finish, so that an interrupted run keeps every finished frame.
+        if plans.len() == 1 {
+            let device_name = gpu.device.report.name.clone();
+            drop(on_gpu);
+            drop(gpu);
+            if args.gpu.validate {
+                log.check().map_err(|report| anyhow!("{report}"))?;
+            }
+            write_picture(&output, exr.as_deref(), &picture, &aovs)?;
+            report(
+                &args,
+                &settings,
+                &scene,
+                &picture,
+                &output,
+                exr.as_deref(),
+                started.elapsed().as_secs_f64(),
+                device_name,
+            );
+            return Ok(());
+        }
+        write_picture(&output, exr.as_deref(), &picture, &aovs)?;
+        finished.push(output.display().to_string());
+        let device_name = gpu.device.report.name.clone();
+        report(
+            &args,
+            &settings,
+            &scene,
+            &picture,
+            &output,
+            exr.as_deref(),
+            frame_started.elapsed().as_secs_f64(),
+            device_name,
+        );
+    }
     drop(on_gpu);
     drop(gpu);
     if args.gpu.validate {
-        // Teardown messages (leaks) arrive when the device goes; check after it is gone, before writing.
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
-    write_outputs(&output, &picture, &aovs)?;
-    if let Some(exr) = &args.exr {
-        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        strata::output::write_frame_with_layers(exr, picture.linear(), &layers)?;
+    if !args.quiet {
+        eprintln!("strata: {} frames in {:.1} s", finished.len(), started.elapsed().as_secs_f64());
     }
-    let seconds = started.elapsed().as_secs_f64();
+    Ok(())
+}
+
+/// Ctrl-C between or during the frames of a sequence: the finished frames stay, the one in flight is dropped.
+fn interrupted(finished: Vec<String>, total: usize, on_gpu: strata::render::SceneOnGpu, gpu: Gpu) -> Result<()> {
+    drop(on_gpu);
+    drop(gpu);
+    eprintln!(
+        "strata: interrupted after {} of {total} frames; the finished frames are kept ({}), none is half-written",
+        finished.len(),
+        if finished.is_empty() { "none".to_string() } else { finished.join(", ") }
+    );
+    std::process::exit(130);
+}
+
+/// What `--time`, `--turntable` and `--frames` ask for (at most one of them).
+fn sequence_of(args: &RenderArgs) -> Result<sequence::Sequence> {
+    use sequence::Sequence;
+    let asked = [args.time.is_some(), args.turntable.is_some(), args.frames.is_some()];
+    if asked.iter().filter(|a| **a).count() > 1 {
+        bail!("--time, --turntable and --frames each make their own frames: give one of them");
+    }
+    if args.shutter.is_some() && (args.time.is_some() || args.frames.is_some()) {
+        bail!("--shutter sets one still frame's shutter; with --time and --frames use --shutter-angle");
+    }
+    Ok(match (args.time, args.turntable, args.frames) {
+        (Some(t), _, _) => Sequence::Time(t),
+        (_, Some(views), _) => {
+            Sequence::Turntable { views, first_theta: args.orbit.map(|o| o.theta_degrees).unwrap_or(0.0) }
+        }
+        (_, _, Some((first, last))) => Sequence::Frames { first, last },
+        _ => Sequence::Single,
+    })
+}
+
+/// Where the camera comes from: the scene's, or one strata places (--orbit, --target, --turntable, or no camera
+/// in the scene) that frames the scene's bounds in this image's shape, with --yfov.
+struct Framing {
+    /// Whether strata places the camera.
+    places: bool,
+    /// An explicit orbit (--orbit, or a turntable's): its azimuth turns per view.
+    orbit: Option<Orbit>,
+    /// Otherwise the default framing direction.
+    direction: glam::Vec3,
+    target: Option<glam::Vec3>,
+    /// Vertical field of view, radians.
+    yfov: f32,
+    bounds: Option<(glam::Vec3, glam::Vec3)>,
+    aspect: f32,
+}
+
+/// The elevation of a turntable, or of --target alone, in degrees.
+const DEFAULT_ELEVATION: f32 = 20.0;
+
+impl Framing {
+    fn of(args: &RenderArgs, scene: &strata::scene::Scene, aspect: f32) -> Result<Self> {
+        let target = args.target.map(glam::Vec3::from_array);
+        let explicit = args.orbit.is_some() || target.is_some() || args.turntable.is_some();
+        let places = explicit || scene.camera.is_none();
+        if !places && args.yfov.is_some() {
+            if let Some(camera) = &scene.camera {
+                if !matches!(camera.projection, strata::scene::Projection::Perspective { .. }) {
+                    bail!("--yfov needs a perspective camera; this scene's camera is orthographic");
+                }
+            }
+        }
+        let yfov = args.yfov.unwrap_or(strata::scene::camera::FRAMING_YFOV_DEGREES).to_radians();
+        let orbit = explicit.then(|| {
+            args.orbit.unwrap_or(Orbit { theta_degrees: 0.0, phi_degrees: DEFAULT_ELEVATION, distance: None })
+        });
+        Ok(Self {
+            places,
+            orbit,
+            direction: strata::scene::camera::FRAMING_DIRECTION.normalize(),
+            target,
+            yfov,
+            bounds: scene.bounds(),
+            aspect,
+        })
+    }
+
+    /// The camera of a frame (turned to azimuth `theta` for a turntable's view); None: keep the scene's.
+    fn camera(&self, theta: Option<f32>) -> Option<strata::scene::Camera> {
+        if !self.places {
+            return None;
+        }
+        let (direction, distance) = match self.orbit {
+            Some(o) => (Orbit { theta_degrees: theta.unwrap_or(o.theta_degrees), ..o }.direction(), o.distance),
+            None => (self.direction, None),
+        };
+        Some(strata::scene::Camera::around(self.bounds, self.target, direction, distance, self.yfov, self.aspect))
+    }
+}
+
+/// `--yfov` on the scene's own (perspective) camera.
+fn apply_yfov(scene: &mut strata::scene::Scene, degrees: Option<f32>) {
+    if let (Some(d), Some(camera)) = (degrees, scene.camera.as_mut()) {
+        if let strata::scene::Projection::Perspective { yfov, .. } = &mut camera.projection {
+            *yfov = d.to_radians();
+        }
+    }
+}
+
+/// The summary line (and JSON) of one written frame.
+#[allow(clippy::too_many_arguments)]
+fn report(
+    args: &RenderArgs,
+    settings: &strata::scene::settings::RenderSettings,
+    scene: &strata::scene::Scene,
+    picture: &Picture,
+    output: &std::path::Path,
+    exr: Option<&std::path::Path>,
+    seconds: f64,
+    device: String,
+) {
     let mut written = vec![output.display().to_string()];
-    written.extend(args.exr.iter().map(|p| p.display().to_string()));
+    written.extend(exr.map(|p| p.display().to_string()));
     let summary = Summary {
         written,
         width: settings.width,
@@ -136,7 +349,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         spp: if args.preview { 1 } else { settings.spp },
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
         primary: if args.preview { "raster" } else { settings.primary.name() },
-        trace: match &picture {
+        trace: match picture {
             Picture::Rendered(r) => r.stats.trace.name(),
             Picture::Preview(_) => "no",
         },
@@ -144,19 +357,38 @@ pub fn render(args: RenderArgs) -> Result<()> {
         bounces: if args.preview { 0 } else { settings.bounces },
         seed: settings.seed,
         seconds,
-        stats: match &picture {
+        stats: match picture {
             Picture::Rendered(r) => Some(r.stats.clone()),
             Picture::Preview(_) => None,
         },
-        device: device_name,
+        device,
         triangles: scene.triangle_count(),
         instances: scene.instances.len(),
+        exposure: match picture {
+            Picture::Rendered(r) => r.exposure,
+            Picture::Preview(_) => settings.exposure,
+        },
+        auto_exposure: settings.auto_exposure && !args.preview,
     };
     if args.json {
         print_stdout(&format!("{}\n", summary.json()));
     }
     if !args.quiet {
         eprintln!("{}", summary.line());
+    }
+}
+
+/// The picture at `output` (with its AOVs) and, when asked, the linear radiance and AOV layers at `exr`.
+fn write_picture(
+    output: &std::path::Path,
+    exr: Option<&std::path::Path>,
+    picture: &Picture,
+    aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
+) -> Result<()> {
+    write_outputs(output, picture, aovs)?;
+    if let Some(exr) = exr {
+        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
+        strata::output::write_frame_with_layers(exr, picture.linear(), &layers)?;
     }
     Ok(())
 }

@@ -19,6 +19,9 @@ pub struct Summary {
     pub device: String,
     pub triangles: usize,
     pub instances: usize,
+    /// The exposure the picture was made with, in stops, and whether auto exposure chose it.
+    pub exposure: f32,
+    pub auto_exposure: bool,
 }
 
 impl Summary {
@@ -32,7 +35,7 @@ impl Summary {
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
         let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
         format!(
-            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} tracing{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} tracing{}{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
              {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
             self.written.join(" and "),
             self.width,
@@ -42,6 +45,7 @@ impl Summary {
             self.primary,
             self.trace,
             if self.indirect { ", indirect diffuse" } else { "" },
+            if self.auto_exposure { format!(", auto exposure {:+.2} EV", self.exposure) } else { String::new() },
             self.triangles,
             self.device,
             self.seconds,
@@ -76,6 +80,8 @@ impl Summary {
             "device": self.device,
             "triangles": self.triangles,
             "instances": self.instances,
+            "exposure": self.exposure,
+            "auto_exposure": self.auto_exposure,
         })
     }
 }

@@ -120,8 +120,10 @@ pub struct AccumulateInputs<'a> {
     pub primitives: &'a Buffer,
     pub textures: &'a GpuTextures,
     pub counters: &'a Buffer,
-    /// One `GpuCamera` per sample slot (read in the reference mode).
+    /// One `GpuCamera` per sample slot (the reference mode's primary rays, and every mode's background).
     pub cameras: &'a Buffer,
+    /// The scene's environment (render::environment).
+    pub environment: &'a Buffer,
 }
 
 /// How the pass spreads a sample's pixels over the invocations it launches. The picture does not depend on it
@@ -150,6 +152,8 @@ pub struct AccumulateVariant {
     /// Some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is forced opaque and
     /// the pipeline carries no alpha test (and no any-hit shader).
     pub alpha_tested: bool,
+    /// The scene has an environment; without one the pipeline holds none of its code (HAS_ENVIRONMENT).
+    pub environment: bool,
     pub launch: AccumulateLaunch,
     /// Bytes to move the shader binding table off its alignment (0 but in the test that breaks it on purpose).
     pub table_shift: u64,
@@ -157,7 +161,10 @@ pub struct AccumulateVariant {
 
 impl AccumulatePass {
     pub fn new(device: &Arc<Device>, variant: &AccumulateVariant) -> Result<Self> {
-        let AccumulateVariant { path, texture_count, primary_rays, alpha_tested, launch, table_shift } = *variant;
+        let AccumulateVariant { path, texture_count, primary_rays, alpha_tested, environment, launch, table_shift } =
+            *variant;
+        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3.
+        let flag = u32::from;
         let bindings = Self::bindings(texture_count);
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
         let mode = if primary_rays { " (primary rays)" } else { "" };
@@ -174,7 +181,7 @@ impl AccumulatePass {
                 ("accumulate.comp", shaders::ACCUMULATE_COMP),
                 &bindings,
                 push_constant_size,
-                &[u32::from(primary_rays), u32::from(alpha_tested)],
+                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment)],
             )?),
             TracePath::Pipeline => {
                 let runs = if pixel_runs { ", pixel runs" } else { "" };
@@ -188,7 +195,7 @@ impl AccumulatePass {
                         any_hit: alpha_tested.then_some(("accumulate.rahit", shaders::ACCUMULATE_RAHIT)),
                         bindings: &bindings,
                         push_constant_size,
-                        constants: &[u32::from(primary_rays), u32::from(alpha_tested), u32::from(pixel_runs)],
+                        constants: &[flag(primary_rays), flag(alpha_tested), flag(pixel_runs), flag(environment)],
                     },
                 )?;
                 let table = Box::new(ShaderBindingTable::new(device, &pipeline, table_shift)?);
@@ -231,6 +238,7 @@ impl AccumulatePass {
             },
             Binding::new(ACCUMULATE_BINDING_COUNTERS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_CAMERAS, D::STORAGE_BUFFER),
+            Binding::new(ACCUMULATE_BINDING_ENVIRONMENT, D::STORAGE_BUFFER),
         ]
     }
 
@@ -279,7 +287,8 @@ impl AccumulatePass {
             .storage_buffer(ACCUMULATE_BINDING_PRIMITIVES, inputs.primitives)
             .combined_image_samplers(ACCUMULATE_BINDING_TEXTURES, &inputs.textures.bindings())
             .storage_buffer(ACCUMULATE_BINDING_COUNTERS, inputs.counters)
-            .storage_buffer(ACCUMULATE_BINDING_CAMERAS, inputs.cameras);
+            .storage_buffer(ACCUMULATE_BINDING_CAMERAS, inputs.cameras)
+            .storage_buffer(ACCUMULATE_BINDING_ENVIRONMENT, inputs.environment);
         Ok(set)
     }
 

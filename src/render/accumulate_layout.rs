@@ -11,6 +11,8 @@ pub mod light_kind {
     pub const DISK: f32 = 4.0;
     pub const SPHERE: f32 = 5.0;
     pub const TRIANGLE: f32 = 6.0;
+    /// The environment: the first of a sample's lights when the scene has one.
+    pub const ENVIRONMENT: f32 = 7.0;
 }
 
 /// One light at one sample time, in world space. Area lights carry radiance, point and spot lights intensity,
@@ -140,7 +142,10 @@ pub struct ResolvePush {
     pub exposure_scale: f32,
     /// 0: clamp, 1: filmic.
     pub tone_map: u32,
-    pub pad: [u32; 3],
+    /// 1: a transparent background: the display image keeps coverage in alpha, its colour unpremultiplied
+    /// (straight alpha, as PNG stores it); 0: opaque.
+    pub transparent: u32,
+    pub pad: [u32; 2],
 }
 
 /// Counters per sample slot: shadow rays, secondary rays, and the next tile a workgroup takes (the accumulation

@@ -10,13 +10,12 @@ use super::accumulate_layout::{
 };
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::lights::LightSet;
-use super::ray_scene::RayScene;
 use super::resolve::ResolvePass;
 use super::SceneOnGpu;
 use crate::math::lens::{camera_sample, CameraSample};
 use crate::math::sampling::{sample_1d, sample_2d};
 use crate::output::Frame;
-use crate::scene::settings::{Primary, RenderSettings, SamplerKind};
+use crate::scene::settings::{Backdrop, Primary, RenderSettings, SamplerKind};
 use crate::scene::{Projection, Scene};
 use crate::vk::accel::DynamicTlas;
 use crate::vk::commands::{image_barrier, memory_barrier, submit_and_wait, Access};
@@ -149,6 +148,8 @@ pub struct RenderedFrame {
     pub stats: FrameStats,
     /// With [`FrameOptions::log_rays`]: the rays of sample 0's accumulation pass, in the order it cast them.
     pub ray_log: Vec<super::ray_probe::ProbeRay>,
+    /// The exposure (stops) the display image was made with: the setting, or what auto exposure chose.
+    pub exposure: f32,
 }
 
 /// The error a render returns when its progress callback asked it to stop (Ctrl-C).
@@ -242,11 +243,17 @@ pub fn render_frame(
     let extent = vk::Extent2D { width, height };
     let texture_count = on_gpu.textures.images.len() as u32;
     let traced = settings.primary == Primary::Rays;
+    let backdrop = settings.backdrop_for(scene.environment.is_some());
+    let look = super::resolve::DisplayLook {
+        exposure: settings.exposure,
+        tone_map: settings.tone_map,
+        transparent: backdrop == Backdrop::Transparent,
+    };
     let gbuffer_pass = GBufferPass::new(device, texture_count)?;
     let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
     // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
     let gbuffer = if traced { GBuffer::new(device, 1, 1)? } else { GBuffer::new(device, width, height)? };
-    let ray_scene = RayScene::build(device, scene, &on_gpu.geometry, scene.materials.len() as u32)?;
+    let ray_scene = on_gpu.ray_scene(device, scene)?;
     let batch = batch_size(u64::from(width) * u64::from(height), spp);
     let mut tlas = DynamicTlas::new(device, "scene TLAS", ray_scene.traced_instances.len() as u32, batch)?;
 
@@ -263,7 +270,10 @@ pub fn render_frame(
         (LightSet::at(scene, &moved, &transforms, &rest, radius), transforms)
     };
     let (first_lights, _) = lights_at(scene.shutter.0);
-    let light_capacity = (scene.lights.len() + first_lights.lights.len() - first_lights.analytic).max(1);
+    // Analytic lights (the environment, then the scene's lights: some may drop out at a time where their node's
+    // transform is not finite) and the emissive triangles, whose count does not change with time.
+    let analytic_capacity = usize::from(scene.environment.is_some()) + scene.lights.len();
+    let light_capacity = (analytic_capacity + first_lights.lights.len() - first_lights.analytic).max(1);
     let light_bytes = (light_capacity * std::mem::size_of::<GpuLight>()) as u64;
     // Per-sample-slot buffers the host refills (or reads back) once per batch.
     let per_slot = |name: &str, bytes_per_slot: u64, location: MemoryLocation| {
@@ -283,6 +293,7 @@ pub fn render_frame(
             texture_count,
             primary_rays: traced,
             alpha_tested: ray_scene.alpha_tested,
+            environment: scene.environment.is_some(),
             launch: options.accumulate_launch,
             table_shift: options.misalign_shader_binding_table,
         },
@@ -297,6 +308,7 @@ pub fn render_frame(
         textures: &on_gpu.textures,
         counters: &counters,
         cameras: &cameras,
+        environment: &on_gpu.environment,
     })?;
     // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
     // Path vertices: the visible surface and its bounces.
@@ -355,7 +367,7 @@ pub fn render_frame(
             let push = AccumulatePush {
                 eye: camera_sample.eye.extend(if orthographic { 1.0 } else { 0.0 }),
                 forward: forward.extend(0.0),
-                background: settings.background.extend(0.0),
+                background: settings.background.extend(backdrop.code() as f32),
                 width,
                 height,
                 sample_index: index,
@@ -435,7 +447,7 @@ pub fn render_frame(
                     (vk::ImageLayout::UNDEFINED, Access::NONE),
                     (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
                 );
-                resolve.record(cmd, &resolve_set, extent, spp, settings.exposure, settings.tone_map);
+                resolve.record(cmd, &resolve_set, extent, spp, &look);
                 if let Some(timer) = &timer {
                     timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, batch * TIMESTAMPS_PER_SAMPLE + 1);
                 }
@@ -467,6 +479,18 @@ pub fn render_frame(
     }
     let linear = read_image(device, &accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_READ_WRITE)?;
     let linear = Frame::new(width, height, linear.to_rgba_f32()?)?;
+    let mut exposure = settings.exposure;
+    if settings.auto_exposure {
+        // The accumulation now holds the mean: resolve it again (× 1) at the exposure the picture asks for.
+        exposure = auto_exposure(&linear, look.transparent);
+        let look = super::resolve::DisplayLook { exposure, ..look };
+        submit_and_wait(device, "auto-exposure resolve", |cmd| {
+            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
+            resolve.record(cmd, &resolve_set, extent, 1, &look);
+            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
+            Ok(())
+        })?;
+    }
     let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
     let stats = FrameStats {
         trace: accumulate.path(),
@@ -485,5 +509,29 @@ pub fn render_frame(
         Some(log) => log.rays()?,
         None => Vec::new(),
     };
-    Ok(RenderedFrame { linear, display, stats, ray_log })
+    Ok(RenderedFrame { linear, display, stats, ray_log, exposure })
+}
+
+/// The middle grey photographic tone reproduction maps the log-average luminance to (Reinhard et al.,
+/// "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002: the key value a).
+pub const MIDDLE_GREY: f32 = 0.18;
+
+/// The exposure in stops that maps a frame's log-average luminance exp(mean ln(δ + L)) to middle grey, over the
+/// pixels something covers when the background is transparent (else every pixel); within ±24 stops.
+pub fn auto_exposure(frame: &Frame, covered_only: bool) -> f32 {
+    let luminance = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let (mut sum, mut n) = (0.0f64, 0u64);
+    for p in frame.pixels.iter().filter(|p| !covered_only || p[3] > 0.0) {
+        // Covered fractionally: the colour is premultiplied, so the luminance of the surface is L / alpha.
+        let l = if covered_only { luminance(p) / p[3] } else { luminance(p) };
+        if l.is_finite() {
+            sum += f64::from(1e-4 + l.max(0.0)).ln();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return 0.0;
+    }
+    let log_average = (sum / n as f64).exp() as f32;
+    (MIDDLE_GREY / log_average).log2().clamp(-24.0, 24.0)
 }

@@ -35,6 +35,24 @@ impl LightSet {
     pub fn at(scene: &Scene, moved: &[Mat4], transforms: &[Mat4], rest: &[Mat4], scene_radius: f32) -> Self {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
+        // The environment comes first (the shader finds its selection probability there). Its power for
+        // selection is what it would pour onto a disk of the scene's radius: π R² · π · mean radiance.
+        if let Some(environment) = &scene.environment {
+            lights.push(GpuLight {
+                position_kind: Vec4::new(0.0, 0.0, 0.0, light_kind::ENVIRONMENT),
+                axis_u: Vec4::ZERO,
+                axis_v: Vec4::ZERO,
+                normal: Vec4::ZERO,
+                emission: Vec4::ZERO,
+                cone: Vec4::ZERO,
+                uv01: Vec4::ZERO,
+                uv2_material: Vec4::new(0.0, 0.0, -1.0, 0.0),
+                corner_alpha: Vec4::ONE,
+                uv1_01: Vec4::ZERO,
+                uv1_2: Vec4::ZERO,
+            });
+            powers.push(PI * scene_radius * scene_radius * PI * luminance(environment.mean_radiance()));
+        }
         for light in &scene.lights {
             let world = match light.node {
                 Some(n) if n < moved.len() && n < rest.len() => moved[n] * rest[n].inverse() * light.world_from_light,

@@ -12,6 +12,16 @@ use anyhow::Result;
 use ash::vk;
 use std::sync::Arc;
 
+/// How the display image is made from the linear one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DisplayLook {
+    /// Stops: radiance × 2^exposure before the tone map.
+    pub exposure: f32,
+    pub tone_map: ToneMap,
+    /// Keep coverage in alpha, the colour unpremultiplied (a transparent background).
+    pub transparent: bool,
+}
+
 pub struct ResolvePass {
     pipeline: Pipeline,
     device: Arc<Device>,
@@ -51,9 +61,9 @@ impl ResolvePass {
         set: &DescriptorSet,
         extent: vk::Extent2D,
         samples: u32,
-        exposure: f32,
-        tone_map: ToneMap,
+        look: &DisplayLook,
     ) {
+        let DisplayLook { exposure, tone_map, transparent } = *look;
         let push = ResolvePush {
             width: extent.width,
             height: extent.height,
@@ -63,7 +73,8 @@ impl ResolvePass {
                 ToneMap::Clamp => 0,
                 ToneMap::Filmic => 1,
             },
-            pad: [0; 3],
+            transparent: u32::from(transparent),
+            pad: [0; 2],
         };
         labelled(&self.device, cmd, "resolve pass", || {
             self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(&push));

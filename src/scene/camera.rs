@@ -35,20 +35,72 @@ pub struct Camera {
     pub lens: Lens,
 }
 
+/// Where a camera sits on an orbit around what it looks at: the azimuth θ about +Y, from +Z towards +X (θ = 0
+/// looks along −Z, as a glTF camera does by default), the elevation φ above the horizontal plane, in degrees, and
+/// the distance (None: far enough to frame the scene).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orbit {
+    pub theta_degrees: f32,
+    pub phi_degrees: f32,
+    pub distance: Option<f32>,
+}
+
+impl Orbit {
+    /// The unit direction from the target to the camera.
+    pub fn direction(&self) -> Vec3 {
+        let (theta, phi) = (self.theta_degrees.to_radians(), self.phi_degrees.to_radians());
+        Vec3::new(theta.sin() * phi.cos(), phi.sin(), theta.cos() * phi.cos())
+    }
+}
+
+/// The vertical field of view of framing cameras.
+pub const FRAMING_YFOV_DEGREES: f32 = 45.0;
+/// How much farther than just touching the image's edges a framing camera stands (10%).
+pub const FRAMING_MARGIN: f32 = 1.1;
+/// The direction a default framing camera looks from: in front, a little to the right and above.
+pub const FRAMING_DIRECTION: Vec3 = Vec3::new(0.35, 0.45, 1.0);
+
 impl Camera {
     /// A perspective camera that frames the given bounds: looking at their centre along −Z, raised a little,
-    /// far enough that the bounding sphere fits the vertical field of view.
+    /// far enough that the bounding sphere fits the vertical field of view (a square image's).
     pub fn framing(bounds: Option<(Vec3, Vec3)>) -> Self {
+        Self::around(bounds, None, FRAMING_DIRECTION.normalize(), None, FRAMING_YFOV_DEGREES.to_radians(), 1.0)
+    }
+
+    /// A perspective camera with vertical field of view `yfov` (radians) looking at `target` (None: the centre of
+    /// `bounds`) from the unit `direction`, at `distance` or, without one, far enough that the sphere about the
+    /// target holding all of `bounds` fits both the vertical and the horizontal field of view of an image of
+    /// `aspect` (width / height), with [`FRAMING_MARGIN`].
+    pub fn around(
+        bounds: Option<(Vec3, Vec3)>,
+        target: Option<Vec3>,
+        direction: Vec3,
+        distance: Option<f32>,
+        yfov: f32,
+        aspect: f32,
+    ) -> Self {
         let (lo, hi) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
-        let center = (lo + hi) * 0.5;
-        let radius = ((hi - lo).length() * 0.5).max(1e-3);
-        let yfov = 45f32.to_radians();
-        let distance = radius / (yfov * 0.5).sin() * 1.1;
-        let direction = Vec3::new(0.35, 0.45, 1.0).normalize();
+        let center = target.unwrap_or((lo + hi) * 0.5);
+        // The farthest corner of the box from the target: the sphere holding all of it.
+        let radius = (0..8)
+            .map(|i| {
+                let corner = Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                );
+                (corner - center).length()
+            })
+            .fold(0.0f32, f32::max)
+            .max(1e-3);
+        let xfov = 2.0 * ((yfov * 0.5).tan() * aspect.max(1e-3)).atan();
+        let half = 0.5 * yfov.min(xfov);
+        let distance = distance.unwrap_or(radius / half.sin() * FRAMING_MARGIN);
         let eye = center + direction * distance;
+        let up = if direction.cross(Vec3::Y).length() > 1e-4 { Vec3::Y } else { Vec3::NEG_Z };
         Self {
-            name: "default framing camera".into(),
-            world_from_camera: look_at(eye, center, Vec3::Y),
+            name: "framing camera".into(),
+            world_from_camera: look_at(eye, center, up),
             projection: Projection::Perspective {
                 yfov,
                 znear: (distance - radius).max(distance * 1e-3),

@@ -265,11 +265,28 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Opt
         Some(s) => s.nodes().map(|n| n.index()).collect(),
         None => Vec::new(),
     };
-    for &root in &scene.roots {
-        if let Some(parent) = scene.nodes[root].parent {
-            bail!("scene root node {root} is also a child of node {parent}");
+    // glTF §3.5.2 says a scene's nodes must be roots; widely used exporters (Kenney's models among them) also list
+    // children there, and every viewer draws such a file. Keep the hierarchy: draw each node once, as a child,
+    // from its topmost ancestor, with a warning.
+    let mut roots: Vec<usize> = Vec::with_capacity(scene.roots.len());
+    for &listed in &scene.roots {
+        let mut top = listed;
+        while let Some(parent) = scene.nodes[top].parent {
+            top = parent;
+        }
+        if top != listed {
+            scene.warnings.push(format!(
+                "scene node {listed} (\"{}\") is listed as a root but is a child of node {}; drawing it once, as a \
+                 child (glTF 2.0 §3.5.2)",
+                scene.nodes[listed].name,
+                scene.nodes[listed].parent.unwrap_or(top)
+            ));
+        }
+        if !roots.contains(&top) {
+            roots.push(top);
         }
     }
+    scene.roots = roots;
     let world = scene.node_world_transforms(None);
     let gltf_nodes: Vec<gltf::Node<'_>> = document.nodes().collect();
     // Depth-first from the roots, in document order: instances, cameras and lights of the rendered scene.

@@ -2,6 +2,7 @@
 //! Knows nothing about Vulkan.
 pub mod animation;
 pub mod camera;
+pub mod environment;
 pub mod gltf_accessors;
 pub mod gltf_export;
 pub mod gltf_import;
@@ -134,6 +135,8 @@ pub struct Scene {
     pub camera_motion: RigidMotion,
     /// Shutter open and close times in seconds (equal: no motion blur).
     pub shutter: (f32, f32),
+    /// Light from infinitely far away (an HDR image or a generated one), and what escaping rays see.
+    pub environment: Option<environment::Environment>,
     /// Things the loader skipped (unknown optional extensions, unsupported channels), for the user to read.
     pub warnings: Vec<String>,
 }
@@ -200,7 +203,9 @@ impl Scene {
 
     /// Whether anything in the scene gives light: a light, or an emissive material.
     pub fn has_light(&self) -> bool {
-        !self.lights.is_empty() || self.materials.iter().any(|m| m.emissive.max_element() > 0.0)
+        !self.lights.is_empty()
+            || self.environment.is_some()
+            || self.materials.iter().any(|m| m.emissive.max_element() > 0.0)
     }
 
     /// Adds a directional key light from above and behind the camera's left shoulder (irradiance π, so a white

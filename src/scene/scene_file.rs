@@ -2,10 +2,12 @@
 //! lights, Perlin bump materials, motion, render settings. Unknown keys, wrong types and out-of-range values are
 //! errors with the file, line and column. The format is documented in `docs/scene-format.md`.
 use super::camera::{look_at, Lens};
+use super::environment::Environment;
 use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
-use super::settings::{Primary, SamplerKind, SettingsOverrides, ToneMap, Trace, MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{Backdrop, Primary, SamplerKind, SettingsOverrides, ToneMap, Trace};
+use super::settings::{MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
@@ -30,6 +32,18 @@ struct FileRoot {
     #[serde(default, rename = "motion")]
     motions: Vec<MotionSection>,
     render: Option<RenderSection>,
+    environment: Option<EnvironmentSection>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentSection {
+    /// An equirectangular .hdr or .exr image, relative to the scene file.
+    file: Option<S<String>>,
+    /// Or one strata makes: "studio".
+    builtin: Option<S<String>>,
+    rotation_degrees: Option<S<f32>>,
+    intensity: Option<S<f32>>,
 }
 
 #[derive(Deserialize)]
@@ -95,7 +109,7 @@ struct RenderSection {
     spp: Option<S<u32>>,
     sampler: Option<S<String>>,
     seed: Option<u64>,
-    background: Option<S<[f32; 3]>>,
+    background: Option<S<toml::Value>>,
     exposure: Option<S<f32>>,
     tone_map: Option<S<String>>,
     primary: Option<S<String>>,
@@ -232,6 +246,9 @@ fn apply(source: &Source<'_>, root: &FileRoot, scene: &mut Scene) -> Result<()> 
         scene.lights.push(l);
     }
     apply_bumps(source, &root.bumps, scene)?;
+    if let Some(e) = &root.environment {
+        scene.environment = Some(environment(source, e)?);
+    }
     for m in &root.motions {
         let name = m.node.get_ref();
         let matches: Vec<usize> =
@@ -588,6 +605,60 @@ fn apply_bumps(source: &Source<'_>, bumps: &[BumpSection], scene: &mut Scene) ->
     Ok(())
 }
 
+/// `background`: a linear RGB colour `[r, g, b]`, or "environment" or "transparent".
+fn background(source: &Source<'_>, b: &S<toml::Value>) -> Result<(Option<Vec3>, Option<Backdrop>)> {
+    let wrong = || {
+        source
+            .error(b.span(), "background must be [r, g, b] (linear, not negative), \"environment\" or \"transparent\"")
+    };
+    match b.get_ref() {
+        toml::Value::String(word) => match word.as_str() {
+            "environment" => Ok((None, Some(Backdrop::Environment))),
+            "transparent" => Ok((None, Some(Backdrop::Transparent))),
+            _ => Err(wrong()),
+        },
+        toml::Value::Array(items) if items.len() == 3 => {
+            let rgb: Vec<f64> = items
+                .iter()
+                .map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+                .collect::<Option<_>>()
+                .ok_or_else(wrong)?;
+            if rgb.iter().any(|x| !x.is_finite() || *x < 0.0) {
+                return Err(wrong());
+            }
+            Ok((Some(Vec3::new(rgb[0] as f32, rgb[1] as f32, rgb[2] as f32)), Some(Backdrop::Colour)))
+        }
+        _ => Err(wrong()),
+    }
+}
+
+/// The `[environment]` table: a file (relative to the scene file) or a builtin, turned and scaled.
+fn environment(source: &Source<'_>, e: &EnvironmentSection) -> Result<Environment> {
+    let dir = source.path.parent().unwrap_or(Path::new("."));
+    let mut environment = match (&e.file, &e.builtin) {
+        (Some(file), None) => {
+            let path = dir.join(file.get_ref());
+            Environment::load(&path).map_err(|err| source.error(file.span(), format!("{err:#}")))?
+        }
+        (None, Some(name)) => match name.get_ref().as_str() {
+            "studio" => Environment::studio(512, 256),
+            other => {
+                return Err(
+                    source.error(name.span(), format!("unknown builtin environment \"{other}\" (one of: studio)"))
+                )
+            }
+        },
+        _ => bail!("{}: [environment] needs one of file = \"...\" or builtin = \"studio\"", source.path.display()),
+    };
+    if let Some(r) = &e.rotation_degrees {
+        environment.rotation_degrees = source.in_range(r, "rotation_degrees", -360.0, 360.0)?;
+    }
+    if let Some(i) = &e.intensity {
+        environment.intensity = source.in_range(i, "intensity", 0.0, 1e9)?;
+    }
+    Ok(environment)
+}
+
 fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result<SettingsOverrides> {
     let sampler = r
         .sampler
@@ -600,15 +671,9 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         r.primary.as_ref().map(|s| Primary::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
     let trace =
         r.trace.as_ref().map(|s| Trace::parse(s.get_ref()).map_err(|e| source.error(s.span(), e))).transpose()?;
-    let background = match &r.background {
-        Some(b) => {
-            let rgb = source.finite(b, "background")?;
-            if rgb.iter().any(|&x| x < 0.0) {
-                return Err(source.error(b.span(), "background must not be negative"));
-            }
-            Some(Vec3::from_array(rgb))
-        }
-        None => None,
+    let (background, backdrop) = match &r.background {
+        Some(b) => background(source, b)?,
+        None => (None, None),
     };
     Ok(SettingsOverrides {
         width: source.count_in_range(&r.width, "width", 1, MAX_IMAGE_SIDE)?,
@@ -617,6 +682,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         sampler,
         seed: r.seed,
         background,
+        backdrop,
         exposure: r.exposure.as_ref().map(|e| source.in_range(e, "exposure", -64.0, 64.0)).transpose()?,
         tone_map,
         primary,

@@ -112,6 +112,29 @@ impl Trace {
     }
 }
 
+/// What pixels no surface covers show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backdrop {
+    /// The background colour (`RenderSettings::background`).
+    Colour,
+    /// The scene's environment, as escaping rays see it.
+    Environment,
+    /// Nothing: alpha 0 (PNG and EXR keep coverage in alpha); the scene is still lit as before.
+    Transparent,
+}
+
+impl Backdrop {
+    /// The value the accumulation pass reads (`BACKGROUND_*` in shared_constants.glsl).
+    pub fn code(self) -> u32 {
+        use crate::shaders::constants::{BACKGROUND_COLOUR, BACKGROUND_ENVIRONMENT, BACKGROUND_TRANSPARENT};
+        match self {
+            Backdrop::Colour => BACKGROUND_COLOUR,
+            Backdrop::Environment => BACKGROUND_ENVIRONMENT,
+            Backdrop::Transparent => BACKGROUND_TRANSPARENT,
+        }
+    }
+}
+
 /// Largest image side strata accepts before asking the device (which may allow less).
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest samples-per-pixel count accepted: more is a typo, not a render.
@@ -126,10 +149,15 @@ pub struct RenderSettings {
     pub spp: u32,
     pub sampler: SamplerKind,
     pub seed: u64,
-    /// Linear RGB seen where rays escape.
+    /// Linear RGB seen where rays escape (without an environment).
     pub background: Vec3,
+    /// What pixels no surface covers show; None: the environment when the scene has one, else the colour.
+    pub backdrop: Option<Backdrop>,
     /// Exposure in stops: radiance is scaled by 2^exposure before tone mapping.
     pub exposure: f32,
+    /// Choose the exposure from the picture instead: its log-average luminance to middle grey (`exposure` is then
+    /// ignored; the frame reports what it used).
+    pub auto_exposure: bool,
     pub tone_map: ToneMap,
     pub primary: Primary,
     /// Paths also go on by the diffuse lobe: diffuse interreflection (Kajiya 1986) on top of Cook's effects.
@@ -152,7 +180,9 @@ impl Default for RenderSettings {
             sampler: SamplerKind::Jittered,
             seed: 0,
             background: Vec3::new(0.02, 0.02, 0.025),
+            backdrop: None,
             exposure: 0.0,
+            auto_exposure: false,
             tone_map: ToneMap::Filmic,
             primary: Primary::Raster,
             indirect: false,
@@ -172,6 +202,7 @@ pub struct SettingsOverrides {
     pub sampler: Option<SamplerKind>,
     pub seed: Option<u64>,
     pub background: Option<Vec3>,
+    pub backdrop: Option<Backdrop>,
     pub exposure: Option<f32>,
     pub tone_map: Option<ToneMap>,
     pub primary: Option<Primary>,
@@ -182,6 +213,11 @@ pub struct SettingsOverrides {
 }
 
 impl RenderSettings {
+    /// What pixels no surface covers show, for a scene with or without an environment.
+    pub fn backdrop_for(&self, has_environment: bool) -> Backdrop {
+        self.backdrop.unwrap_or(if has_environment { Backdrop::Environment } else { Backdrop::Colour })
+    }
+
     /// These settings with `overrides` applied on top.
     pub fn with(mut self, overrides: &SettingsOverrides) -> Self {
         let o = overrides.clone();
@@ -191,6 +227,7 @@ impl RenderSettings {
         self.sampler = o.sampler.unwrap_or(self.sampler);
         self.seed = o.seed.unwrap_or(self.seed);
         self.background = o.background.unwrap_or(self.background);
+        self.backdrop = o.backdrop.or(self.backdrop);
         self.exposure = o.exposure.unwrap_or(self.exposure);
         self.tone_map = o.tone_map.unwrap_or(self.tone_map);
         self.primary = o.primary.unwrap_or(self.primary);
