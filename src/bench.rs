@@ -74,7 +74,7 @@ pub fn time_gbuffer(
     let scene = bump.apply(scene);
     let on_gpu = SceneOnGpu::upload(device, &scene)?;
     let (gpu_scene, textures) = (&on_gpu.geometry, &on_gpu.textures);
-    let pass = GBufferPass::new(device, textures.images.len() as u32)?;
+    let pass = GBufferPass::new(device)?;
     let gbuffer = GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
     let materials = pass.materials(&scene, textures)?;
@@ -218,7 +218,6 @@ pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TraceP
     use crate::render::accumulate::{AccumulateLaunch, AccumulatePass, AccumulateVariant};
     let variant = AccumulateVariant {
         path,
-        texture_count: 1,
         primary_rays: false,
         alpha_tested: true,
         environment: false,

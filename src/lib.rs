@@ -61,7 +61,7 @@ pub fn render_preview(
     on_gpu: &render::SceneOnGpu,
     settings: &render::PreviewSettings,
 ) -> Result<output::Frame> {
-    let pass = render::PreviewPass::new(&gpu.device, on_gpu.textures.images.len() as u32)?;
+    let pass = render::PreviewPass::new(&gpu.device)?;
     pass.render(scene, &on_gpu.geometry, &on_gpu.textures, settings)
 }
 
@@ -76,7 +76,7 @@ pub fn render_aovs(
     aovs: &[render::aov::Aov],
 ) -> Result<Vec<(render::aov::Aov, output::Frame)>> {
     let device = &gpu.device;
-    let pass = render::gbuffer::GBufferPass::new(device, on_gpu.textures.images.len() as u32)?;
+    let pass = render::gbuffer::GBufferPass::new(device)?;
     let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
     let transforms = scene.instance_transforms_at(scene.shutter.0);
     let materials = pass.materials(scene, &on_gpu.textures)?;

@@ -690,3 +690,36 @@ fn auto_exposure_maps_the_log_average_to_middle_grey_whatever_the_light_level() 
         .count();
     assert_eq!(differing, 0, "the exposed pictures differ at {differing} pixels");
 }
+
+#[test]
+fn several_scenes_render_in_one_run_and_a_broken_one_does_not_stop_the_others() {
+    let dir = temp_dir("several");
+    let pattern = dir.join("{name}.png");
+    let (a, b) = (samples().join("Box.gltf"), samples().join("BoxTextured.gltf"));
+    let broken = dir.join("broken.gltf");
+    std::fs::write(&broken, "{ not json").unwrap();
+    let out = strata(&[
+        "render",
+        a.to_str().unwrap(),
+        broken.to_str().unwrap(),
+        b.to_str().unwrap(),
+        "-o",
+        pattern.to_str().unwrap(),
+        "--size",
+        "32x24",
+        "--spp",
+        "2",
+        "--validate",
+        "--quiet",
+    ]);
+    assert_eq!(out.status.code(), Some(1), "one scene failed: {}", outcome(&out));
+    assert!(dir.join("Box.png").is_file() && dir.join("BoxTextured.png").is_file());
+    assert!(!dir.join("broken.png").exists());
+    let text = stderr(&out);
+    assert!(text.contains(&format!("error: {}", broken.display())), "{text}");
+    assert!(text.contains("1 of 3 scenes failed"), "{text}");
+    // Without {name} several scenes would write one file: refused before any work.
+    let out = strata(&["render", a.to_str().unwrap(), b.to_str().unwrap(), "-o", dir.join("x.png").to_str().unwrap()]);
+    assert!(!out.status.success() && stderr(&out).contains("need {name} in -o"), "{}", stderr(&out));
+    assert!(!dir.join("x.png").exists());
+}

@@ -43,7 +43,7 @@ fn camera(eye: Vec3, target: Vec3, up: Vec3, lens: Lens) -> Camera {
 /// The pass, built once per test: lavapipe compiles the noise-heavy fragment shader in seconds. Most test scenes
 /// have at most one texture, so one pipeline (sized for one texture slot) serves them.
 fn pass(gpu: &common::GpuTest) -> GBufferPass {
-    GBufferPass::new(gpu.device(), 1).unwrap()
+    GBufferPass::new(gpu.device()).unwrap()
 }
 
 /// Renders the G-buffer for one camera sample.
@@ -381,7 +381,7 @@ fn metallic_roughness_and_emissive_textures_scale_their_factors() {
     use strata::render::gbuffer_layout::{EMISSION, MATERIAL};
     use strata::scene::{Sampler, Texture, TextureImage, TextureRef};
     let gpu = common::GpuTest::raster_only();
-    let pass = GBufferPass::new(gpu.device(), 2).unwrap();
+    let pass = GBufferPass::new(gpu.device()).unwrap();
     // Roughness in G, metalness in B, stored linear (glTF 2.0 §3.9.2); the emissive texel is sRGB colour.
     let metal_rough = [0u8, 153, 51, 255];
     let emissive = [188u8, 128, 64, 255];
@@ -424,7 +424,7 @@ fn texture_transforms_apply_to_every_texture_and_transmission_and_specular_textu
     use strata::render::gbuffer_layout::{EMISSION, GEOMETRIC_NORMAL, MATERIAL, SPECULAR_COLOR};
     use strata::scene::{Texture, TextureImage, TextureRef, UvTransform, Wrap};
     let gpu = common::GpuTest::raster_only();
-    let pass = GBufferPass::new(gpu.device(), 3).unwrap();
+    let pass = GBufferPass::new(gpu.device()).unwrap();
     let white = [255u8; 4];
     // Right texels: roughness in G, metalness in B, transmission in R, specular in A (linear); the emissive one
     // is sRGB.

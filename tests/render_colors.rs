@@ -91,7 +91,7 @@ fn check(gpu: &common::GpuTest, path: &Path, min_agreement: f32) {
     let settings = PreviewSettings { width: 160, height: 120, background: [0.0, 0.0, 0.0] };
     let gpu_scene = strata::render::GpuScene::upload(gpu.device(), &loaded.scene).unwrap();
     let textures = strata::render::textures::GpuTextures::upload(gpu.device(), &loaded.scene).unwrap();
-    let pass = strata::render::PreviewPass::new(gpu.device(), textures.images.len() as u32).unwrap();
+    let pass = strata::render::PreviewPass::new(gpu.device()).unwrap();
     let frame = pass.render(&loaded.scene, &gpu_scene, &textures, &settings).unwrap();
     let (fraction, covered) = agreement(&loaded.scene, &frame, &settings);
     let name = path.file_name().unwrap().to_string_lossy();

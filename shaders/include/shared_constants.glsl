@@ -11,10 +11,11 @@ const uint ACCUMULATE_BINDING_ACCUMULATION = 3u;
 const uint ACCUMULATE_BINDING_MATERIALS = 4u;
 const uint ACCUMULATE_BINDING_LIGHTS = 5u;
 const uint ACCUMULATE_BINDING_PRIMITIVES = 6u;
-const uint ACCUMULATE_BINDING_TEXTURES = 7u;
 const uint ACCUMULATE_BINDING_COUNTERS = 8u;
 const uint ACCUMULATE_BINDING_CAMERAS = 9u;
-const uint ACCUMULATE_BINDING_ENVIRONMENT = 10u;
+const uint ACCUMULATE_BINDING_ENVIRONMENT = 7u;
+// The texture array is the set's last binding: its size varies per scene (one pipeline serves every size).
+const uint ACCUMULATE_BINDING_TEXTURES = 10u;
 // The side of the accumulation compute shader's square workgroup: one tile of its tile queue.
 const uint ACCUMULATE_TILE_SIZE = 8u;
 // The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device

@@ -108,8 +108,12 @@ pub struct GpuArgs {
 #[derive(Args)]
 pub struct RenderArgs {
     /// The scene: a glTF 2.0 file (.gltf or .glb), or a scene file (.toml, see docs/scene-format.md) that names
-    /// one and adds camera, lights, materials, motion and render settings.
-    pub scene: PathBuf,
+    /// one and adds camera, lights, materials, motion and render settings. Several render one after another on
+    /// one device and one set of pipelines (thumbnails of a library); -o then needs {name}, which becomes each
+    /// file's name without its extension. A scene that fails is reported and the others still render; the
+    /// exit status is then non-zero.
+    #[arg(required = true, num_args = 1.., value_name = "SCENE")]
+    pub scenes: Vec<PathBuf>,
     /// Output file, .png (exposed, tone-mapped, 8-bit sRGB) or .exr (linear radiance, 32-bit float)
     /// [default: the scene file's render.output].
     #[arg(short, long, value_name = "FILE")]

@@ -23,13 +23,68 @@ fn install_interrupt_handler() {
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
+    install_interrupt_handler();
+    let several = args.scenes.len() > 1;
+    if several {
+        let named = |p: &Option<std::path::PathBuf>| p.as_ref().is_none_or(|p| p.to_string_lossy().contains("{name}"));
+        if args.output.is_none() || !named(&args.output) || !named(&args.exr) {
+            bail!(
+                "{} scenes need {{name}} in -o (and --exr), e.g. -o 'thumbs/{{name}}.png', so that each gets its own file",
+                args.scenes.len()
+            );
+        }
+    }
+    // One device and one set of pipelines for every scene; made by the first scene that gets that far.
+    let mut gpu: Option<Gpu> = None;
+    let mut failed: Vec<String> = Vec::new();
+    for scene_path in &args.scenes {
+        match render_scene(&args, scene_path, &mut gpu, several) {
+            Ok(()) => {}
+            Err(e) if several && e.downcast_ref::<strata::render::frame::Interrupted>().is_none() => {
+                // Loading errors name their file already; others get it in front.
+                let text = format!("{e:#}");
+                let named = scene_path.display().to_string();
+                if text.starts_with(&named) {
+                    eprintln!("error: {text}");
+                } else {
+                    eprintln!("error: {named}: {text}");
+                }
+                failed.push(scene_path.display().to_string());
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let log = gpu.as_ref().map(|g| g.validation_log());
+    drop(gpu);
+    if let (true, Some(log)) = (args.gpu.validate, log) {
+        log.check().map_err(|report| anyhow!("{report}"))?;
+    }
+    if !failed.is_empty() {
+        bail!("{} of {} scenes failed: {}", failed.len(), args.scenes.len(), failed.join(", "));
+    }
+    Ok(())
+}
+
+/// `{name}` in an output path: the scene file's name without its extension.
+fn for_scene(path: &std::path::Path, scene: &std::path::Path) -> std::path::PathBuf {
+    let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+    std::path::PathBuf::from(path.to_string_lossy().replace("{name}", &name))
+}
+
+/// One scene: load, frame, render its frame or frames, write them. With `several`, outputs are written as each
+/// frame finishes and the device stays for the next scene.
+fn render_scene(
+    args: &RenderArgs,
+    scene_path: &std::path::Path,
+    gpu_slot: &mut Option<Gpu>,
+    several: bool,
+) -> Result<()> {
     use std::io::IsTerminal as _;
     use std::sync::atomic::Ordering;
-    install_interrupt_handler();
     let options = strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true) };
-    let loaded = strata::load(&args.scene, &options)?;
+    let loaded = strata::load(scene_path, &options)?;
     for warning in &loaded.scene.warnings {
-        eprintln!("warning: {}: {warning}", args.scene.display());
+        eprintln!("warning: {}: {warning}", scene_path.display());
     }
     let cli = strata::scene::settings::SettingsOverrides {
         width: args.size.map(|s| s.0),
@@ -65,16 +120,18 @@ pub fn render(args: RenderArgs) -> Result<()> {
         .output
         .clone()
         .ok_or_else(|| anyhow!("no output file: pass -o FILE (or set output in the scene file's [render] table)"))?;
+    let output = for_scene(&output, scene_path);
+    let exr_output = args.exr.as_ref().map(|e| for_scene(e, scene_path));
     // Check the output names before any work, so a typo costs nothing.
     strata::output::OutputFormat::from_path(&output)?;
     strata::output::check_output_directory(&output)?;
-    if let Some(exr) = &args.exr {
+    if let Some(exr) = &exr_output {
         if strata::output::OutputFormat::from_path(exr)? != strata::output::OutputFormat::Exr {
             bail!("--exr {}: the file name must end in .exr", exr.display());
         }
         strata::output::check_output_directory(exr)?;
     }
-    let sequence = sequence_of(&args)?;
+    let sequence = sequence_of(args)?;
     let mut scene = loaded.scene;
     if let Some(path) = &args.environment {
         scene.environment = Some(if path.as_os_str() == "studio" {
@@ -101,10 +158,10 @@ pub fn render(args: RenderArgs) -> Result<()> {
         eprintln!(
             "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
              (add [[light]] tables in a scene file, or --environment, see docs/scene-format.md)",
-            args.scene.display()
+            scene_path.display()
         );
     }
-    let framing = Framing::of(&args, &scene, settings.width as f32 / settings.height as f32)?;
+    let framing = Framing::of(args, &scene, settings.width as f32 / settings.height as f32)?;
     match framing.camera(None) {
         Some(camera) => scene.camera = Some(camera),
         None => apply_yfov(&mut scene, args.yfov),
@@ -115,16 +172,23 @@ pub fn render(args: RenderArgs) -> Result<()> {
         shutter: args.shutter,
     }
     .apply(&mut scene)
-    .with_context(|| format!("{}: applying the command line's camera options", args.scene.display()))?;
+    .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
     let lens = scene.camera.as_ref().map(|c| c.lens);
     let plans = sequence::plan(sequence, args.fps, args.shutter_angle);
     let started = std::time::Instant::now();
-    let gpu = Gpu::new(&GpuOptions {
-        validation: args.gpu.validate,
-        echo_messages: args.gpu.validate,
-        device: args.gpu.device.clone(),
-        needs: strata::render::accumulate::TracePath::device_needs(settings.trace),
-    })?;
+    if gpu_slot.is_none() {
+        *gpu_slot = Some(Gpu::new(&GpuOptions {
+            validation: args.gpu.validate,
+            echo_messages: args.gpu.validate,
+            device: args.gpu.device.clone(),
+            needs: strata::render::accumulate::TracePath::device_needs(if several {
+                args.trace.unwrap_or_default()
+            } else {
+                settings.trace
+            }),
+        })?);
+    }
+    let gpu = gpu_slot.as_ref().expect("made above");
     let log = gpu.validation_log();
     // Geometry, textures and the environment go up once for every frame and pass of this run.
     let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
@@ -132,7 +196,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
     let mut finished: Vec<String> = Vec::new();
     for (k, plan) in plans.iter().enumerate() {
         if INTERRUPTED.load(Ordering::SeqCst) {
-            return interrupted(finished, plans.len(), on_gpu, gpu);
+            return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
         }
         // This frame's camera and shutter; everything else stays as uploaded.
         if let Some(camera) = framing.camera(plan.theta_degrees) {
@@ -142,8 +206,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
             scene.shutter = shutter;
         }
         let (output, exr) = match plan.number {
-            Some(n) => (sequence::numbered(&output, n), args.exr.as_ref().map(|e| sequence::numbered(e, n))),
-            None => (output.clone(), args.exr.clone()),
+            Some(n) => (sequence::numbered(&output, n), exr_output.as_ref().map(|e| sequence::numbered(e, n))),
+            None => (output.clone(), exr_output.clone()),
         };
         if plans.len() > 1 && !args.quiet {
             eprintln!("strata: frame {} of {} ({})", k + 1, plans.len(), output.display());
@@ -156,25 +220,25 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 height: settings.height,
                 background: settings.background.to_array(),
             };
-            Picture::Preview(strata::render_preview(&gpu, &scene, &on_gpu, &preview)?)
+            Picture::Preview(strata::render_preview(gpu, &scene, &on_gpu, &preview)?)
         } else {
             let mut progress = |done: u32, total: u32| {
                 bar.update(done, total);
                 !INTERRUPTED.load(Ordering::SeqCst)
             };
             let frame_options = strata::render::frame::FrameOptions::default();
-            let rendered = strata::render(&gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
+            let rendered = strata::render(gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
             bar.finish();
             match rendered {
                 Ok(r) => Picture::Rendered(r),
                 Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() && !finished.is_empty() => {
-                    return interrupted(finished, plans.len(), on_gpu, gpu);
+                    return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
                 }
                 Err(e) => return Err(e),
             }
         };
         let aovs = match &args.aov {
-            Some(list) => strata::render_aovs(&gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
+            Some(list) => strata::render_aovs(gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
             None => Vec::new(),
         };
         if args.gpu.validate {
@@ -183,16 +247,16 @@ pub fn render(args: RenderArgs) -> Result<()> {
         }
         // A single frame is written after the device's teardown passed the layer; a sequence's frames as they
         // finish, so that an interrupted run keeps every finished frame.
-        if plans.len() == 1 {
+        if plans.len() == 1 && !several {
             let device_name = gpu.device.report.name.clone();
             drop(on_gpu);
-            drop(gpu);
+            drop(gpu_slot.take());
             if args.gpu.validate {
                 log.check().map_err(|report| anyhow!("{report}"))?;
             }
             write_picture(&output, exr.as_deref(), &picture, &aovs)?;
             report(
-                &args,
+                args,
                 &settings,
                 &scene,
                 &picture,
@@ -207,7 +271,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
         finished.push(output.display().to_string());
         let device_name = gpu.device.report.name.clone();
         report(
-            &args,
+            args,
             &settings,
             &scene,
             &picture,
@@ -218,18 +282,22 @@ pub fn render(args: RenderArgs) -> Result<()> {
         );
     }
     drop(on_gpu);
-    drop(gpu);
     if args.gpu.validate {
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
-    if !args.quiet {
+    if plans.len() > 1 && !args.quiet {
         eprintln!("strata: {} frames in {:.1} s", finished.len(), started.elapsed().as_secs_f64());
     }
     Ok(())
 }
 
 /// Ctrl-C between or during the frames of a sequence: the finished frames stay, the one in flight is dropped.
-fn interrupted(finished: Vec<String>, total: usize, on_gpu: strata::render::SceneOnGpu, gpu: Gpu) -> Result<()> {
+fn interrupted(
+    finished: Vec<String>,
+    total: usize,
+    on_gpu: strata::render::SceneOnGpu,
+    gpu: Option<Gpu>,
+) -> Result<()> {
     drop(on_gpu);
     drop(gpu);
     eprintln!(

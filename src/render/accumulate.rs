@@ -145,8 +145,6 @@ pub enum AccumulateLaunch {
 #[derive(Debug, Clone, Copy)]
 pub struct AccumulateVariant {
     pub path: TracePath,
-    /// Entries of the bindless texture array.
-    pub texture_count: u32,
     /// Trace each pixel's primary ray (the reference mode) instead of reading the G-buffer.
     pub primary_rays: bool,
     /// Some geometry is not opaque to rays (RayScene::alpha_tested); without it every ray is forced opaque and
@@ -161,11 +159,10 @@ pub struct AccumulateVariant {
 
 impl AccumulatePass {
     pub fn new(device: &Arc<Device>, variant: &AccumulateVariant) -> Result<Self> {
-        let AccumulateVariant { path, texture_count, primary_rays, alpha_tested, environment, launch, table_shift } =
-            *variant;
+        let AccumulateVariant { path, primary_rays, alpha_tested, environment, launch, table_shift } = *variant;
         // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3.
         let flag = u32::from;
-        let bindings = Self::bindings(texture_count);
+        let bindings = Self::bindings(device.texture_array_size());
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
         let mode = if primary_rays { " (primary rays)" } else { "" };
         let cpu = device.report.device_type == vk::PhysicalDeviceType::CPU;
@@ -219,26 +216,23 @@ impl AccumulatePass {
 
     /// The pass's descriptor bindings, as `shaders/include/accumulate_bindings.glsl` declares them (every stage
     /// of both ways to trace reads the one set; tests/contracts.rs holds the SPIR-V to this list).
-    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
+    pub fn bindings(texture_array: u32) -> Vec<Binding> {
         use crate::shaders::constants::*;
         use vk::DescriptorType as D;
         vec![
             Binding::new(ACCUMULATE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
             // Every G-buffer attachment but the ids, which the next binding reads as unsigned integers.
-            Binding { binding: ACCUMULATE_BINDING_GBUFFER, kind: D::COMBINED_IMAGE_SAMPLER, count: IDS as u32 },
+            Binding::array(ACCUMULATE_BINDING_GBUFFER, D::COMBINED_IMAGE_SAMPLER, IDS as u32),
             Binding::new(ACCUMULATE_BINDING_GBUFFER_IDS, D::COMBINED_IMAGE_SAMPLER),
             Binding::new(ACCUMULATE_BINDING_ACCUMULATION, D::STORAGE_IMAGE),
             Binding::new(ACCUMULATE_BINDING_MATERIALS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_LIGHTS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_PRIMITIVES, D::STORAGE_BUFFER),
-            Binding {
-                binding: ACCUMULATE_BINDING_TEXTURES,
-                kind: D::COMBINED_IMAGE_SAMPLER,
-                count: texture_count.max(1),
-            },
             Binding::new(ACCUMULATE_BINDING_COUNTERS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_CAMERAS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_ENVIRONMENT, D::STORAGE_BUFFER),
+            Binding::variable_array(ACCUMULATE_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
         ]
     }
 
@@ -266,7 +260,8 @@ impl AccumulatePass {
     /// The descriptor set for one frame: every binding stays the same across its samples.
     pub fn descriptor_set(&self, inputs: &AccumulateInputs<'_>) -> Result<DescriptorSet> {
         use crate::shaders::constants::*;
-        let set = self.pipeline().new_descriptor_set("accumulate set")?;
+        let set =
+            self.pipeline().new_descriptor_set_sized("accumulate set", inputs.textures.bindings().len() as u32)?;
         let gbuffer: Vec<(vk::ImageView, vk::Sampler)> = inputs
             .gbuffer
             .color

@@ -241,7 +241,6 @@ pub fn render_frame(
     }
     let started = std::time::Instant::now();
     let extent = vk::Extent2D { width, height };
-    let texture_count = on_gpu.textures.images.len() as u32;
     let traced = settings.primary == Primary::Rays;
     let backdrop = settings.backdrop_for(scene.environment.is_some());
     let look = super::resolve::DisplayLook {
@@ -249,7 +248,7 @@ pub fn render_frame(
         tone_map: settings.tone_map,
         transparent: backdrop == Backdrop::Transparent,
     };
-    let gbuffer_pass = GBufferPass::new(device, texture_count)?;
+    let gbuffer_pass = GBufferPass::new(device)?;
     let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
     // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
     let gbuffer = if traced { GBuffer::new(device, 1, 1)? } else { GBuffer::new(device, width, height)? };
@@ -290,7 +289,6 @@ pub fn render_frame(
         device,
         &AccumulateVariant {
             path: TracePath::choose(settings.trace, device)?,
-            texture_count,
             primary_rays: traced,
             alpha_tested: ray_scene.alpha_tested,
             environment: scene.environment.is_some(),

@@ -125,17 +125,18 @@ const VERTEX_STREAMS: [(u32, vk::Format); 7] = [
 impl GBufferPass {
     /// The pass's descriptor bindings, as `gbuffer_layout.glsl` and `gbuffer.frag` declare them
     /// (tests/contracts.rs holds the SPIR-V to this list).
-    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
+    pub fn bindings(texture_array: u32) -> Vec<Binding> {
         use vk::DescriptorType as D;
         vec![
             Binding::new(GBUFFER_BINDING_DRAWS, D::STORAGE_BUFFER),
             Binding::new(GBUFFER_BINDING_MATERIALS, D::STORAGE_BUFFER),
-            Binding { binding: GBUFFER_BINDING_TEXTURES, kind: D::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+            Binding::variable_array(GBUFFER_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
         ]
     }
 
-    /// A G-buffer pipeline for scenes with `texture_count` textures (at least one: see `GpuTextures`).
-    pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
+    /// The G-buffer pipeline: one for every scene, whatever its texture count.
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
         let vertex_bindings: Vec<vk::VertexInputBindingDescription> = VERTEX_STREAMS
             .iter()
             .enumerate()
@@ -148,7 +149,7 @@ impl GBufferPass {
                 vk::VertexInputAttributeDescription::default().location(i as u32).binding(i as u32).format(*format)
             })
             .collect();
-        let bindings = Self::bindings(texture_count);
+        let bindings = Self::bindings(device.texture_array_size());
         let formats: Vec<vk::Format> = ATTACHMENTS.iter().map(|a| a.format).collect();
         let pipeline = Pipeline::graphics(
             device,
@@ -225,7 +226,7 @@ impl GBufferPass {
             crate::vk::MemoryLocation::CpuToGpu,
             16,
         )?;
-        let set = self.pipeline.new_descriptor_set("gbuffer set")?;
+        let set = self.pipeline.new_descriptor_set_sized("gbuffer set", textures.bindings().len() as u32)?;
         set.storage_buffer(GBUFFER_BINDING_DRAWS, &draws)
             .storage_buffer(GBUFFER_BINDING_MATERIALS, &materials.buffer)
             .combined_image_samplers(GBUFFER_BINDING_TEXTURES, &textures.bindings());

@@ -57,16 +57,17 @@ pub struct PreviewPass {
 impl PreviewPass {
     /// The pass's descriptor bindings, as `preview_layout.glsl` and `preview.frag` declare them
     /// (tests/contracts.rs holds the SPIR-V to this list).
-    pub fn bindings(texture_count: u32) -> Vec<Binding> {
+    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
+    pub fn bindings(texture_array: u32) -> Vec<Binding> {
         use vk::DescriptorType as D;
         vec![
             Binding::new(PREVIEW_BINDING_DRAWS, D::STORAGE_BUFFER),
-            Binding { binding: PREVIEW_BINDING_TEXTURES, kind: D::COMBINED_IMAGE_SAMPLER, count: texture_count.max(1) },
+            Binding::variable_array(PREVIEW_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
         ]
     }
 
-    /// A preview pipeline for a scene with `texture_count` textures (at least one: see `GpuTextures`).
-    pub fn new(device: &Arc<Device>, texture_count: u32) -> Result<Self> {
+    /// The preview pipeline: one for every scene, whatever its texture count.
+    pub fn new(device: &Arc<Device>) -> Result<Self> {
         let vertex_bindings = [
             vk::VertexInputBindingDescription::default().binding(0).stride(12),
             vk::VertexInputBindingDescription::default().binding(1).stride(12),
@@ -82,7 +83,7 @@ impl PreviewPass {
                 .binding(3)
                 .format(vk::Format::R32G32B32A32_SFLOAT),
         ];
-        let bindings = Self::bindings(texture_count);
+        let bindings = Self::bindings(device.texture_array_size());
         let pipeline = Pipeline::graphics(
             device,
             &GraphicsDesc {
@@ -159,7 +160,7 @@ impl PreviewPass {
             draws.push(bytemuck::Zeroable::zeroed());
         }
         let draw_buffer = Buffer::with_data(device, "preview draws", &draws, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
-        let set = self.pipeline.new_descriptor_set("preview set")?;
+        let set = self.pipeline.new_descriptor_set_sized("preview set", textures.bindings().len() as u32)?;
         set.storage_buffer(PREVIEW_BINDING_DRAWS, &draw_buffer)
             .combined_image_samplers(PREVIEW_BINDING_TEXTURES, &textures.bindings());
 

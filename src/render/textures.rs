@@ -49,6 +49,14 @@ impl GpuTextures {
             };
             samplers.push(Sampler::new(device, &format!("{} sampler", texture.name), &desc)?);
         }
+        let room = device.texture_array_size() as usize;
+        if images.len() > room {
+            anyhow::bail!(
+                "{}: {} textures, more than the {room} this device's texture array holds",
+                scene.source.display(),
+                images.len()
+            );
+        }
         if images.is_empty() {
             let white = [255u8; 4];
             let extent = vk::Extent2D { width: 1, height: 1 };

@@ -19,12 +19,16 @@ impl DescriptorSet {
         name: &str,
         layout: vk::DescriptorSetLayout,
         bindings: &[Binding],
+        variable_count: Option<u32>,
     ) -> Result<Self> {
+        let variable = bindings.iter().find(|b| b.variable);
+        let variable_count = variable.map(|b| variable_count.unwrap_or(b.count).clamp(1, b.count));
         let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
         for b in bindings {
+            let count = if b.variable { variable_count.unwrap_or(b.count) } else { b.count };
             match sizes.iter_mut().find(|s| s.ty == b.kind) {
-                Some(size) => size.descriptor_count += b.count,
-                None => sizes.push(vk::DescriptorPoolSize { ty: b.kind, descriptor_count: b.count }),
+                Some(size) => size.descriptor_count += count,
+                None => sizes.push(vk::DescriptorPoolSize { ty: b.kind, descriptor_count: count }),
             }
         }
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
@@ -32,7 +36,13 @@ impl DescriptorSet {
             .with_context(|| format!("vkCreateDescriptorPool for {name}"))?;
         device.set_name(pool, &format!("{name} pool"));
         let layouts = [layout];
-        let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+        let counts = [variable_count.unwrap_or(0)];
+        let mut variable_info =
+            vk::DescriptorSetVariableDescriptorCountAllocateInfo::default().descriptor_counts(&counts);
+        let mut alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&layouts);
+        if variable_count.is_some() {
+            alloc = alloc.push_next(&mut variable_info);
+        }
         let raw = match unsafe { device.raw.allocate_descriptor_sets(&alloc) } {
             Ok(sets) => sets[0],
             Err(e) => {

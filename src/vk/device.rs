@@ -315,6 +315,9 @@ pub fn select_device(reports: &[DeviceReport], selector: Option<&str>, needs: De
 }
 
 /// Limits strata reads often.
+/// The most textures a scene may have: the size of the passes' texture arrays where the device allows it.
+pub const MAX_TEXTURE_ARRAY: u32 = 4096;
+
 #[derive(Debug, Clone, Copy)]
 pub struct DeviceLimits {
     pub min_scratch_offset_alignment: u64,
@@ -324,6 +327,8 @@ pub struct DeviceLimits {
     /// Rasterization snaps vertices to 1/2^bits of a pixel (Vulkan spec, "Rasterization"): what a CPU twin of
     /// the raster pass can expect to agree to.
     pub sub_pixel_precision_bits: u32,
+    /// The most sampled images (and samplers) one shader stage and one set may see: what bounds the texture array.
+    pub max_sampled_images: u32,
 }
 
 /// What a device with `VK_KHR_ray_tracing_pipeline` enabled brings: its commands and its shader-group limits.
@@ -377,6 +382,15 @@ impl Device {
             timestamp_period_ns: props.limits.timestamp_period,
             min_storage_buffer_offset_alignment: props.limits.min_storage_buffer_offset_alignment,
             sub_pixel_precision_bits: props.limits.sub_pixel_precision_bits,
+            max_sampled_images: [
+                props.limits.max_per_stage_descriptor_sampled_images,
+                props.limits.max_per_stage_descriptor_samplers,
+                props.limits.max_descriptor_set_sampled_images,
+                props.limits.max_descriptor_set_samplers,
+            ]
+            .into_iter()
+            .min()
+            .unwrap_or(16),
         };
 
         let priorities = [1.0f32];
@@ -544,6 +558,13 @@ impl Device {
     }
 
     /// Waits until the device is idle (used before teardown and after errors).
+    /// The size of the passes' texture arrays: one size for every scene, so one set of pipelines serves them all
+    /// (a scene's textures fill the array's first entries). At most [`MAX_TEXTURE_ARRAY`], and within the
+    /// device's limits after the other sampled images a pass binds (the accumulation pass's G-buffer).
+    pub fn texture_array_size(&self) -> u32 {
+        MAX_TEXTURE_ARRAY.min(self.limits.max_sampled_images.saturating_sub(16)).max(1)
+    }
+
     pub fn wait_idle(&self) -> Result<()> {
         let _queue = self.queue();
         unsafe { self.raw.device_wait_idle() }.context("vkDeviceWaitIdle")

@@ -4,7 +4,7 @@
 //! every pass that asks for the same.
 use super::descriptors::DescriptorSet;
 use super::device::Device;
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use std::collections::HashMap;
 use std::ffi::CStr;
@@ -46,11 +46,24 @@ pub struct Binding {
     pub binding: u32,
     pub kind: vk::DescriptorType,
     pub count: u32,
+    /// An array of up to `count` descriptors of which each set fills as many as it needs (partially bound, its
+    /// size given when the set is allocated): the set's last binding, so that one pipeline serves every size.
+    pub variable: bool,
 }
 
 impl Binding {
     pub const fn new(binding: u32, kind: vk::DescriptorType) -> Self {
-        Self { binding, kind, count: 1 }
+        Self { binding, kind, count: 1, variable: false }
+    }
+
+    /// A fixed array of `count` descriptors.
+    pub const fn array(binding: u32, kind: vk::DescriptorType, count: u32) -> Self {
+        Self { binding, kind, count, variable: false }
+    }
+
+    /// An array of up to `max` descriptors, sized per set (descriptorBindingVariableDescriptorCount).
+    pub const fn variable_array(binding: u32, kind: vk::DescriptorType, max: u32) -> Self {
+        Self { binding, kind, count: max, variable: true }
     }
 }
 
@@ -75,7 +88,7 @@ struct PipelineKey {
     bind_point: vk::PipelineBindPoint,
     /// Each stage's SPIR-V, in the order the pipeline's builder takes them.
     spirv: Vec<Vec<u8>>,
-    bindings: Vec<(u32, vk::DescriptorType, u32)>,
+    bindings: Vec<(u32, vk::DescriptorType, u32, bool)>,
     push_constant_size: u32,
     constants: Vec<u32>,
 }
@@ -162,7 +175,26 @@ impl Pipeline {
                     .stage_flags(vk::ShaderStageFlags::ALL)
             })
             .collect();
-        let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw_bindings);
+        if let Some(variable) = bindings.iter().find(|b| b.variable) {
+            if bindings.iter().any(|b| b.binding > variable.binding) {
+                bail!("{name}: the variable-size array at binding {} must be the set's last binding", variable.binding);
+            }
+        }
+        let flags: Vec<vk::DescriptorBindingFlags> = bindings
+            .iter()
+            .map(|b| {
+                if b.variable {
+                    vk::DescriptorBindingFlags::PARTIALLY_BOUND | vk::DescriptorBindingFlags::VARIABLE_DESCRIPTOR_COUNT
+                } else {
+                    vk::DescriptorBindingFlags::empty()
+                }
+            })
+            .collect();
+        let mut binding_flags = vk::DescriptorSetLayoutBindingFlagsCreateInfo::default().binding_flags(&flags);
+        let mut info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&raw_bindings);
+        if bindings.iter().any(|b| b.variable) {
+            info = info.push_next(&mut binding_flags);
+        }
         let set_layout = unsafe { device.raw.create_descriptor_set_layout(&info, None) }
             .with_context(|| format!("vkCreateDescriptorSetLayout for {name}"))?;
         device.set_name(set_layout, &format!("{name} set layout"));
@@ -213,7 +245,7 @@ impl Pipeline {
             name: name.to_owned(),
             bind_point: vk::PipelineBindPoint::COMPUTE,
             spirv: vec![shader.1.to_vec()],
-            bindings: bindings.iter().map(|b| (b.binding, b.kind, b.count)).collect(),
+            bindings: bindings.iter().map(|b| (b.binding, b.kind, b.count, b.variable)).collect(),
             push_constant_size,
             constants: constants.to_vec(),
         };
@@ -247,7 +279,7 @@ impl Pipeline {
             name: desc.name.to_owned(),
             bind_point: vk::PipelineBindPoint::RAY_TRACING_KHR,
             spirv: stages.iter().map(|s| s.1.to_vec()).collect(),
-            bindings: desc.bindings.iter().map(|b| (b.binding, b.kind, b.count)).collect(),
+            bindings: desc.bindings.iter().map(|b| (b.binding, b.kind, b.count, b.variable)).collect(),
             push_constant_size: desc.push_constant_size,
             constants: desc.constants.to_vec(),
         };
@@ -443,9 +475,15 @@ impl Pipeline {
         Ok(pipeline)
     }
 
-    /// A descriptor set for this pipeline's layout, from a pool of its own.
+    /// A descriptor set for this pipeline's layout, from a pool of its own (a variable-size array, if any, at
+    /// its largest).
     pub fn new_descriptor_set(&self, name: &str) -> Result<DescriptorSet> {
-        DescriptorSet::new(&self.device, name, self.set_layout, &self.bindings)
+        DescriptorSet::new(&self.device, name, self.set_layout, &self.bindings, None)
+    }
+
+    /// A descriptor set whose variable-size array holds `variable_count` descriptors.
+    pub fn new_descriptor_set_sized(&self, name: &str, variable_count: u32) -> Result<DescriptorSet> {
+        DescriptorSet::new(&self.device, name, self.set_layout, &self.bindings, Some(variable_count))
     }
 
     /// Binds the pipeline, its descriptor set and push constants.
