@@ -1,18 +1,22 @@
 #version 460
-// The resolve pass: the accumulated sum over N samples becomes the pixel estimate R = (1/N) Σ I (written back
-// in place as linear radiance, for EXR), then exposure, a tone map (clamp, or Narkowicz's 2015 fit of the ACES
-// filmic curve) and the sRGB encoding (IEC 61966-2-1) into an 8-bit image for PNG.
+// The resolve pass: the fixed-point sum of N samples (fixed_point.glsl) becomes the pixel estimate R = (1/N) Σ I
+// (linear radiance, for EXR), then exposure, a tone map (clamp, or Narkowicz's 2015 fit of the ACES filmic curve)
+// and the sRGB encoding (IEC 61966-2-1) into an 8-bit image for PNG.
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_scalar_block_layout : require
 #include "shared_constants.glsl"
+#include "fixed_point.glsl"
 
 layout(local_size_x = RESOLVE_TILE_SIZE, local_size_y = RESOLVE_TILE_SIZE) in;
 
-layout(set = 0, binding = RESOLVE_BINDING_ACCUMULATION, rgba32f) uniform image2D accumulation;
+layout(set = 0, binding = RESOLVE_BINDING_ACCUMULATION, rgba32f) uniform writeonly image2D accumulation;
 layout(set = 0, binding = RESOLVE_BINDING_DISPLAY, rgba8) uniform writeonly image2D display;
+layout(set = 0, binding = RESOLVE_BINDING_SUMS, std430) readonly buffer Sums { u64vec4 sums[]; };
 
 layout(push_constant, std430) uniform ResolvePush {
     uint width;
     uint height;
-    float inv_samples;
+    uint samples;      // N, what the sums hold
     float exposure_scale;
     uint tone_map;
     uint transparent;  // 1: keep coverage in alpha, colour unpremultiplied (straight alpha, as PNG stores it)
@@ -30,7 +34,7 @@ vec3 srgb_encode(vec3 c) {
 void main() {
     ivec2 p = ivec2(gl_GlobalInvocationID.xy);
     if (gl_GlobalInvocationID.x >= pc.width || gl_GlobalInvocationID.y >= pc.height) return;
-    vec4 mean = imageLoad(accumulation, p) * pc.inv_samples;
+    vec4 mean = fixed_point_mean(sums[gl_GlobalInvocationID.y * pc.width + gl_GlobalInvocationID.x], pc.samples);
     imageStore(accumulation, p, mean);
     // With a transparent background the accumulated colour is premultiplied by coverage (samples that missed
     // added nothing): the display divides it out, so that compositing the PNG over a background brings it back.

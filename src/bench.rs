@@ -109,7 +109,7 @@ pub fn time_gbuffer(
 }
 
 /// The middle value (the upper one of an even count); `values` is not empty.
-fn median(mut values: Vec<f64>) -> f64 {
+pub fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
     values[values.len() / 2]
 }

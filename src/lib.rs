@@ -3,8 +3,10 @@
 pub mod bench;
 pub mod check;
 pub mod fatal_signals;
+pub mod hash;
 pub mod math;
 pub mod output;
+pub mod partial;
 pub mod render;
 pub mod scene;
 pub mod shaders;
@@ -100,4 +102,34 @@ pub fn render(
     progress: &mut dyn FnMut(u32, u32) -> bool,
 ) -> Result<render::frame::RenderedFrame> {
     render::frame::render_frame(&gpu.device, scene, on_gpu, settings, options, progress)
+}
+
+/// What a part of this render belongs to (`partial::file::Provenance`): parts merge only when all of it agrees.
+/// The scene and settings are fingerprinted as rendered (their debug text, hashed as it is written), the device
+/// with its driver and the way it traces, since another device may round differently.
+pub fn part_provenance(
+    gpu: &vk::Gpu,
+    scene: &scene::Scene,
+    settings: &scene::settings::RenderSettings,
+) -> Result<partial::file::Provenance> {
+    use std::fmt::Write as _;
+    let path = render::accumulate::TracePath::choose(settings.trace, &gpu.device)?;
+    let report = &gpu.device.report;
+    let device: String = format!("{} / {} {} / {}", report.name, report.driver_name, report.driver_info, path.name())
+        .chars()
+        .map(|c| if c.is_ascii() && !c.is_ascii_control() { c } else { '?' })
+        .collect();
+    let mut scene_hash = hash::Fnv1a::default();
+    write!(scene_hash, "{scene:?}")?;
+    // The settings that change the picture: not where it is written, nor how rays are traced (the device says).
+    let picture = scene::settings::RenderSettings { output: None, trace: Default::default(), ..settings.clone() };
+    let mut settings_hash = hash::Fnv1a::default();
+    write!(settings_hash, "{picture:?}")?;
+    Ok(partial::file::Provenance {
+        strata_version: env!("CARGO_PKG_VERSION").to_string(),
+        device,
+        scene: scene_hash.text(),
+        settings: settings_hash.text(),
+        seed: settings.seed,
+    })
 }

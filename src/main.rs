@@ -2,7 +2,7 @@
 mod cli;
 
 use clap::{Parser, Subcommand};
-use cli::args::{BenchArgs, CheckArgs, InfoArgs, RenderArgs};
+use cli::args::{BenchArgs, CheckArgs, InfoArgs, MergeArgs, RenderArgs};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -35,7 +35,7 @@ enum Command {
                             strata render scenes/motion.toml -o motion.exr --shutter 0:0.5 --sampler multi-jittered\n  \
                             strata render scenes/cornell.toml -o cornell.png --spp 256 --sampler sobol --indirect\n  \
                             strata render Box.gltf -o box.png --size 512x512 --json --quiet --validate")]
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List every Vulkan device with its driver, API version and ray-query support, and whether the
     /// Khronos validation layer is installed.
     Info(InfoArgs),
@@ -60,15 +60,22 @@ enum Command {
                             strata check --fraction 2/4 --out shard-2\n  \
                             strata check --bless --cases '^golden/'   # after an intended change of the pictures")]
     Check(CheckArgs),
+    /// Merge parts of one frame, rendered anywhere (`strata render --samples A..B`, `--shard K/N`, or a
+    /// checkpoint), into the frame: byte for byte what one render of every sample writes.
+    #[command(
+        after_help = "The parts must come from one render (the same scene, settings, seed, strata version                             and device: each part's header says) and hold every sample of the frame exactly once;                             otherwise the error names the gap, the overlap or the part that differs, and nothing                             is written. docs/scale-out.md shows Slurm and Kubernetes set-ups.\n\n                            Examples:\n  strata render scenes/showcase.toml -o a.exr --samples 0..32\n                              strata render scenes/showcase.toml -o b.exr --samples 32..64\n                              strata merge a.exr b.exr -o showcase.png\n                              strata merge parts/*.exr -o frame.exr --remove-parts"
+    )]
+    Merge(MergeArgs),
 }
 
 fn main() -> ExitCode {
     strata::fatal_signals::report_fatal_signals();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => cli::render::render(args),
+        Command::Render(args) => cli::render::render(*args),
         Command::Info(args) => cli::info::info(args),
         Command::Bench(args) => cli::bench::bench(args),
+        Command::Merge(args) => cli::merge::merge(args),
         Command::Check(args) => match cli::check::check(args) {
             Ok(true) => Ok(()),
             Ok(false) => return ExitCode::FAILURE,
@@ -78,6 +85,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() => {
+            if cli::render::terminated() {
+                // 128 + SIGTERM, what a shell reports for a process SIGTERM ended.
+                eprintln!("strata: stopped by SIGTERM; nothing was written (--checkpoint keeps the samples so far)");
+                return ExitCode::from(143);
+            }
             eprintln!("strata: interrupted; nothing was written");
             ExitCode::from(130)
         }

@@ -363,7 +363,7 @@ fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
     let pad = offset_of!(GBufferDraw, pad);
     draw.extend([("pad0", pad), ("pad1", pad + 4)]);
     // The Rust struct pads to 16 bytes past the GLSL block's last member.
-    let resolve = of!(ResolvePush; width, height, inv_samples, exposure_scale, tone_map, transparent);
+    let resolve = of!(ResolvePush; width, height, samples, exposure_scale, tone_map, transparent);
     let mut problems = Vec::new();
     for (name, push, structs) in [
         ("gbuffer.vert", gbuffer_push.clone(), vec![("GBufferDraw", draw.clone())]),

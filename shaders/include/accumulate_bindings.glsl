@@ -22,7 +22,8 @@ layout(set = 0, binding = ACCUMULATE_BINDING_TLAS) uniform accelerationStructure
 // Every attachment but the ids, at its GBUFFER_* index (gbuffer_layout.glsl).
 layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_IDS];
 layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER_IDS) uniform usampler2D gbuffer_ids;
-layout(set = 0, binding = ACCUMULATE_BINDING_ACCUMULATION, rgba32f) uniform image2D accumulation;
+// Per pixel, the sum of its samples in fixed point (fixed_point.glsl), row-major.
+layout(set = 0, binding = ACCUMULATE_BINDING_SUMS, std430) buffer Sums { u64vec4 sums[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_LIGHTS, std430) readonly buffer Lights { GpuLight lights[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_PRIMITIVES, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };

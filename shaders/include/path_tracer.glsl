@@ -10,6 +10,7 @@
 #ifndef PATH_TRACER_GLSL
 #define PATH_TRACER_GLSL
 #include "environment.glsl"
+#include "fixed_point.glsl"
 // The rays a sample casts, as cast, for the benchmark's probe to replay without shading (render::ray_log);
 // ProbeRay's layout (ray_probe.comp).
 struct LoggedRay {
@@ -514,14 +515,14 @@ vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout
     return value;
 }
 
-// Adds a pixel's sample (its visible surface's light and its chain's) into the accumulation image.
+// Adds a pixel's sample (its visible surface's light and its chain's) to its sum, in fixed point (the host
+// zeroes the sums before a frame's first sample, or loads them from a checkpoint or a partial render).
 void accumulate_sample(uvec2 pixel, vec4 value) {
-    ivec2 p = ivec2(pixel);
     // A sample that went wrong must not poison the pixel's whole estimate.
     if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);
     // For the tests' error estimates: the sample's squared luminance instead of its coverage.
     if (pc.alpha_moment != 0u) value.w = luminance(value.rgb) * luminance(value.rgb);
-    vec4 sum = pc.sample_index == 0u ? vec4(0.0) : imageLoad(accumulation, p);
-    imageStore(accumulation, p, sum + value);
+    uint i = pixel.y * pc.width + pixel.x;
+    sums[i] += to_fixed_point(value);
 }
 #endif

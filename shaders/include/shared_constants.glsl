@@ -7,7 +7,7 @@
 const uint ACCUMULATE_BINDING_TLAS = 0u;
 const uint ACCUMULATE_BINDING_GBUFFER = 1u;
 const uint ACCUMULATE_BINDING_GBUFFER_IDS = 2u;
-const uint ACCUMULATE_BINDING_ACCUMULATION = 3u;
+const uint ACCUMULATE_BINDING_SUMS = 3u;
 const uint ACCUMULATE_BINDING_MATERIALS = 4u;
 const uint ACCUMULATE_BINDING_LIGHTS = 5u;
 const uint ACCUMULATE_BINDING_PRIMITIVES = 6u;
@@ -31,6 +31,8 @@ const uint COUNTERS_PER_SLOT = 3u;
 const uint BACKGROUND_COLOUR = 0u;
 const uint BACKGROUND_ENVIRONMENT = 1u;
 const uint BACKGROUND_TRANSPARENT = 2u;
+// The fixed point of the samples' sums (fixed_point.glsl; src/partial/): counts of 2^-24.
+const uint SUM_FRACTION_BITS = 24u;
 // The accumulation pass's sabotage bits (pc.sabotage; render::frame::Sabotage): strata check's canaries.
 const uint SABOTAGE_NO_SHADOW_RAYS = 1u;
 const uint SABOTAGE_FLIPPED_NORMALS = 2u;
@@ -46,6 +48,7 @@ const uint PREVIEW_BINDING_TEXTURES = 1u;
 
 // The resolve pass (resolve.comp; render::resolve::ResolvePass): its bindings and its square workgroup's side.
 const uint RESOLVE_BINDING_ACCUMULATION = 0u;
+const uint RESOLVE_BINDING_SUMS = 2u;
 const uint RESOLVE_BINDING_DISPLAY = 1u;
 const uint RESOLVE_TILE_SIZE = 8u;
 

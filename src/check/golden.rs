@@ -167,12 +167,11 @@ fn parse_meta(text: &str) -> Result<BTreeMap<String, GoldenEntry>> {
 
 /// FNV-1a (64-bit) of an image's size and bytes: the exact tier's fingerprint.
 pub fn hash_image(width: u32, height: u32, bytes: &[u8]) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in width.to_le_bytes().iter().chain(&height.to_le_bytes()).chain(bytes) {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    format!("fnv1a64:{h:016x}")
+    let mut h = crate::hash::Fnv1a::default();
+    h.update(&width.to_le_bytes());
+    h.update(&height.to_le_bytes());
+    h.update(bytes);
+    h.text()
 }
 
 /// An 8-bit RGBA image.

@@ -16,8 +16,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE", default_value = "scenes/showcase.toml")]
     pub showcase: PathBuf,
     /// Which benchmark: gbuffer (pass times and bump cost), frame (whole distributed-ray-traced frames, the
-    /// ray-query ceiling, scaling and memory), or all.
-    #[arg(long, value_name = "WHICH", default_value = "all", value_parser = ["all", "gbuffer", "frame"])]
+    /// ray-query ceiling, scaling and memory), scale-out (checkpoint and merge costs), or all.
+    #[arg(long, value_name = "WHICH", default_value = "all", value_parser = ["all", "gbuffer", "frame", "scale-out"])]
     pub only: String,
     /// Samples per pixel of the frame benchmark.
     #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -243,6 +243,28 @@ pub struct RenderArgs {
     /// (film's usual motion blur), 0 is a still frame.
     #[arg(long, value_name = "DEGREES", default_value_t = 180.0, value_parser = parse_shutter_angle)]
     pub shutter_angle: f32,
+    /// Render only samples A to B-1 of the frame's --spp and write a part (-o must be .exr) for `strata merge`:
+    /// 0..32 and 32..64 are the halves of 64, and merge to the bytes one render of 64 makes.
+    #[arg(long, value_name = "A..B", value_parser = parse_sample_range, help_heading = "Scale-out")]
+    pub samples: Option<(u32, u32)>,
+    /// Render shard K of N (1-based): one frame's samples (written as a part for `strata merge`), or with
+    /// --frames/--turntable the frames, each shard a share of them. `auto` takes K and N from the array job of
+    /// Slurm (SLURM_ARRAY_TASK_ID); `auto/N` from a Kubernetes Indexed Job (JOB_COMPLETION_INDEX) or AWS Batch
+    /// (AWS_BATCH_JOB_ARRAY_INDEX), which do not say N.
+    #[arg(long, value_name = "K/N|auto", value_parser = strata::partial::shard::parse_shard, help_heading = "Scale-out")]
+    pub shard: Option<strata::partial::shard::ShardSpec>,
+    /// Save the render's sums to FILE (a part, .exr, written atomically) every --checkpoint-every seconds, and
+    /// on Ctrl-C or SIGTERM (then exit 75). Run the same command again to go on from it: a render killed at any
+    /// moment loses at most one interval and ends with the bytes an uninterrupted one makes. Removed once the
+    /// output is written.
+    #[arg(long, value_name = "FILE", help_heading = "Scale-out")]
+    pub checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints.
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = parse_positive, help_heading = "Scale-out")]
+    pub checkpoint_every: f32,
+    /// Go on from this checkpoint (or part) of the same render instead of starting from zero.
+    #[arg(long, value_name = "FILE", help_heading = "Scale-out")]
+    pub resume: Option<PathBuf>,
     /// Render the fast raster preview (one sample, simple shading, no ray queries) instead.
     #[arg(long)]
     pub preview: bool,
@@ -443,6 +465,11 @@ pub fn parse_shutter_angle(text: &str) -> Result<f32, String> {
 }
 
 /// `A..B` with A ≤ B (frame numbers, inclusive).
+/// `A..B`, samples A to B-1.
+pub fn parse_sample_range(text: &str) -> Result<(u32, u32), String> {
+    strata::partial::sample_set::parse_range(text).map_err(|e| e.to_string())
+}
+
 pub fn parse_frames(text: &str) -> Result<(u32, u32), String> {
     let (a, b) = text.split_once("..").ok_or_else(|| format!("\"{text}\" is not A..B, e.g. 1..48"))?;
     let frame = |s: &str| s.trim().parse::<u32>().map_err(|_| format!("\"{s}\" is not a frame number"));
@@ -476,4 +503,30 @@ pub fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
 /// The exposure in stops of a photographic EV100: 1 / (1.2 × 2^EV100).
 pub fn ev100_stops(ev100: f32) -> f32 {
     -(1.2f32.log2()) - ev100
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The parts: .exr files written by `strata render --samples`, `--shard` or `--checkpoint`, in any order.
+    #[arg(value_name = "PART", required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The frame: .png (display-encoded) or .exr (linear), the bytes one render of every sample writes. With
+    /// --partial, a part (.exr) holding the samples of all the parts.
+    #[arg(short, long, value_name = "FILE")]
+    pub output: PathBuf,
+    /// Also write the linear frame to this .exr (as `strata render --exr` does).
+    #[arg(long, value_name = "FILE")]
+    pub exr: Option<PathBuf>,
+    /// Merge some parts into a bigger part instead of a frame: samples may be missing (a merge tree for many
+    /// machines), none may be twice.
+    #[arg(long)]
+    pub partial: bool,
+    /// Remove the parts once the output is written.
+    #[arg(long)]
+    pub remove_parts: bool,
+    /// No summary line.
+    #[arg(short, long)]
+    pub quiet: bool,
+    #[command(flatten)]
+    pub gpu: GpuArgs,
 }

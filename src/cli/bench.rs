@@ -20,16 +20,117 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         }
         Ok(())
     };
-    if args.only != "frame" {
+    if args.only == "all" || args.only == "gbuffer" {
         run(bench_gbuffer)?;
     }
-    if args.only != "gbuffer" {
+    if args.only == "all" || args.only == "frame" {
         if args.only == "all" {
             println!();
         }
         run(bench_frame)?;
     }
+    if args.only == "all" || args.only == "scale-out" {
+        if args.only == "all" {
+            println!();
+        }
+        run(bench_scale_out)?;
+    }
     Ok(())
+}
+
+/// What scale-out costs besides rendering: a checkpoint (reading the sums back and writing the part), and
+/// merging N parts (reading, adding, resolving, writing the PNG), at the frame benchmark's size, against the
+/// wall time of the frame itself (docs/scale-out.md).
+fn bench_scale_out(args: &BenchArgs, gpu: Gpu) -> Result<()> {
+    use std::time::Instant;
+    use strata::partial::file::{write_part, Part, PartLook};
+    use strata::render::frame::{render_samples, Continuation, FrameOptions};
+    let (w, h) = args.size;
+    let mut scene = strata::load_scene(&args.showcase)?;
+    if !scene.has_light() {
+        scene.add_default_light();
+    }
+    let settings = strata::scene::settings::RenderSettings { width: w, height: h, spp: args.spp, ..Default::default() };
+    println!("Scale-out at {w}x{h}, {} spp, {} on {}", args.spp, args.showcase.display(), gpu.device.report.name);
+    let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
+    let options = FrameOptions { keep_sums: true, ..Default::default() };
+    let started = Instant::now();
+    let frame =
+        render_samples(&gpu.device, &scene, &on_gpu, &settings, &options, Continuation::default(), &mut |_, _| true)?;
+    let frame_s = started.elapsed().as_secs_f64();
+    let sums = frame.sums.ok_or_else(|| anyhow!("the render kept no sums"))?;
+    let provenance = strata::part_provenance(&gpu, &scene, &settings)?;
+    let look = PartLook { exposure: 0.0, tone_map: settings.tone_map, transparent: false, auto_exposure: false };
+    let dir = std::env::temp_dir().join(format!("strata-bench-scale-out-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let result = (|| -> Result<()> {
+        // A checkpoint: the sums back from the device, then the part written (atomically, compressed).
+        let buffer = strata::vk::Buffer::with_data(
+            &gpu.device,
+            "bench sums",
+            &sums.counts,
+            ash::vk::BufferUsageFlags::TRANSFER_SRC,
+            16,
+        )?;
+        let mut read_ms = Vec::new();
+        let mut write_ms = Vec::new();
+        let part_path = dir.join("checkpoint.exr");
+        for _ in 0..args.samples {
+            let t = Instant::now();
+            let back: Vec<u64> =
+                strata::vk::readback::read_buffer(&gpu.device, &buffer, strata::vk::commands::Access::NONE)?;
+            read_ms.push(t.elapsed().as_secs_f64() * 1e3);
+            let part = Part {
+                provenance: provenance.clone(),
+                look,
+                sums: strata::partial::PartialSums { counts: back, ..sums.clone() },
+            };
+            let t = Instant::now();
+            write_part(&part_path, &part)?;
+            write_ms.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        let (read, write) = (strata::bench::median(read_ms), strata::bench::median(write_ms));
+        let bytes = std::fs::metadata(&part_path)?.len();
+        println!(
+            "  checkpoint: read back {read:.1} ms + write {write:.1} ms ({:.1} MiB, {:.1} B/px) = {:.1}% of the frame's \
+             {frame_s:.2} s; every 60 s it costs {:.2}% of a render",
+            bytes as f64 / 1048576.0,
+            bytes as f64 / (f64::from(w) * f64::from(h)),
+            100.0 * (read + write) / 1e3 / frame_s,
+            100.0 * (read + write) / 1e3 / 60.0
+        );
+        // Merges of N parts (the same sums under N disjoint sample ranges: merging does not look at values).
+        for n in [2u32, 4, 8, 16] {
+            let paths: Vec<std::path::PathBuf> = (0..n)
+                .map(|k| {
+                    let path = dir.join(format!("part-{k}.exr"));
+                    let samples = strata::partial::SampleSet::range(args.spp * k / n, args.spp * (k + 1) / n);
+                    let part = Part {
+                        provenance: provenance.clone(),
+                        look,
+                        sums: strata::partial::PartialSums { samples, ..sums.clone() },
+                    };
+                    write_part(&path, &part).map(|_| path)
+                })
+                .collect::<Result<_>>()?;
+            let t = Instant::now();
+            let merged = strata::partial::merge::merge_parts(&paths, true)?;
+            let read_add = t.elapsed().as_secs_f64() * 1e3;
+            let t = Instant::now();
+            let look =
+                strata::render::resolve::DisplayLook { exposure: 0.0, tone_map: settings.tone_map, transparent: false };
+            let resolved = strata::render::resolve::resolve_sums(&gpu.device, &merged.sums, look, false)?;
+            strata::output::write_png_rgba8(&dir.join("merged.png"), w, h, &resolved.display)?;
+            let resolve_write = t.elapsed().as_secs_f64() * 1e3;
+            println!(
+                "  merge of {n:>2} parts: read + add {read_add:.0} ms ({:.1} ms per part), resolve + write PNG {resolve_write:.0} ms",
+                read_add / f64::from(n)
+            );
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
 }
 
 fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {

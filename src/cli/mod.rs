@@ -3,8 +3,10 @@ pub mod args;
 pub mod bench;
 pub mod check;
 pub mod info;
+pub mod merge;
 pub mod progress;
 pub mod render;
+pub mod scale_out;
 pub mod sequence;
 pub mod summary;
 

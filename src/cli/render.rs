@@ -2,6 +2,7 @@
 use super::args::{BackgroundArg, ExposureArg, Orbit, RenderArgs};
 use super::print_stdout;
 use super::progress::ProgressBar;
+use super::scale_out::{self, FramePart};
 use super::sequence;
 use super::summary::Summary;
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -12,6 +13,21 @@ use strata::vk::{Gpu, GpuOptions};
 /// been written either way: outputs are written atomically at the end).
 static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
+/// Set by SIGTERM (what schedulers send before they kill a job): stop like Ctrl-C, and with --checkpoint exit
+/// with [`scale_out::EXIT_TERMINATED`] once the checkpoint is written.
+static TERMINATED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+extern "C" fn on_sigterm(_: libc::c_int) {
+    // Only atomic stores: async-signal-safe.
+    TERMINATED.store(true, std::sync::atomic::Ordering::SeqCst);
+    INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst);
+}
+
+/// Whether SIGTERM stopped the run.
+pub fn terminated() -> bool {
+    TERMINATED.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 fn install_interrupt_handler() {
     use std::sync::atomic::Ordering;
     let _ = ctrlc::set_handler(|| {
@@ -20,11 +36,15 @@ fn install_interrupt_handler() {
             std::process::exit(130);
         }
     });
+    let handler: extern "C" fn(libc::c_int) = on_sigterm;
+    // SAFETY: the handler only stores to atomics.
+    unsafe { libc::signal(libc::SIGTERM, handler as libc::sighandler_t) };
 }
 
 pub fn render(args: RenderArgs) -> Result<()> {
     install_interrupt_handler();
     let several = args.scenes.len() > 1;
+    scale_out::check_options(&args, several)?;
     if several {
         let named = |p: &Option<std::path::PathBuf>| p.as_ref().is_none_or(|p| p.to_string_lossy().contains("{name}"));
         if args.output.is_none() || !named(&args.output) || !named(&args.exr) {
@@ -174,7 +194,12 @@ fn render_scene(
     .apply(&mut scene)
     .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
     let lens = scene.camera.as_ref().map(|c| c.lens);
-    let plans = sequence::plan(sequence, args.fps, args.shutter_angle);
+    let plans = scale_out::frames_of_shard(args, sequence::plan(sequence, args.fps, args.shutter_angle))?;
+    if plans.is_empty() {
+        eprintln!("strata: this shard has no frames (more shards than frames); nothing to do");
+        return Ok(());
+    }
+    let part_plan = if plans.len() == 1 && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         *gpu_slot = Some(Gpu::new(&GpuOptions {
@@ -214,6 +239,7 @@ fn render_scene(
         }
         let frame_started = std::time::Instant::now();
         let mut bar = ProgressBar::new(show_progress);
+        let mut part_out: Option<strata::partial::file::Part> = None;
         let picture = if args.preview {
             let preview = strata::render::PreviewSettings {
                 width: settings.width,
@@ -226,11 +252,26 @@ fn render_scene(
                 bar.update(done, total);
                 !INTERRUPTED.load(Ordering::SeqCst)
             };
-            let frame_options = strata::render::frame::FrameOptions::default();
-            let rendered = strata::render(gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress);
+            let rendered = match &part_plan {
+                None => {
+                    let frame_options = strata::render::frame::FrameOptions::default();
+                    strata::render(gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress).map(|r| (r, None))
+                }
+                Some(plan) => plan.render(gpu, &scene, &on_gpu, &settings, &mut progress),
+            };
             bar.finish();
             match rendered {
-                Ok(r) => Picture::Rendered(r),
+                Ok((r, part)) => {
+                    part_out = part;
+                    Picture::Rendered(Box::new(r))
+                }
+                Err(e)
+                    if e.downcast_ref::<strata::render::frame::Interrupted>().is_some()
+                        && part_plan.as_ref().and_then(|p| p.checkpoint()).is_some() =>
+                {
+                    let checkpoint = part_plan.as_ref().and_then(|p| p.checkpoint()).expect("matched");
+                    return stopped_with_checkpoint(checkpoint, on_gpu, gpu_slot.take());
+                }
                 Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() && !finished.is_empty() => {
                     return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
                 }
@@ -254,7 +295,13 @@ fn render_scene(
             if args.gpu.validate {
                 log.check().map_err(|report| anyhow!("{report}"))?;
             }
-            write_picture(&output, exr.as_deref(), &picture, &aovs)?;
+            match &part_out {
+                Some(part) => strata::partial::file::write_part(&output, part)?,
+                None => write_picture(&output, exr.as_deref(), &picture, &aovs)?,
+            }
+            if let Some(plan) = &part_plan {
+                plan.finish()?;
+            }
             report(
                 args,
                 &settings,
@@ -301,11 +348,34 @@ fn interrupted(
     drop(on_gpu);
     drop(gpu);
     eprintln!(
-        "strata: interrupted after {} of {total} frames; the finished frames are kept ({}), none is half-written",
+        "strata: {} after {} of {total} frames; the finished frames are kept ({}), none is half-written",
+        if terminated() { "stopped by SIGTERM" } else { "interrupted" },
         finished.len(),
         if finished.is_empty() { "none".to_string() } else { finished.join(", ") }
     );
-    std::process::exit(130);
+    std::process::exit(if terminated() { 143 } else { 130 });
+}
+
+/// Ctrl-C or SIGTERM during a render with --checkpoint: the samples so far are in the checkpoint (written by the
+/// render as it stopped); say so and exit, 75 after SIGTERM (run the same command again), 130 after Ctrl-C.
+fn stopped_with_checkpoint(
+    checkpoint: &std::path::Path,
+    on_gpu: strata::render::SceneOnGpu,
+    gpu: Option<Gpu>,
+) -> Result<()> {
+    drop(on_gpu);
+    drop(gpu);
+    let terminated = TERMINATED.load(std::sync::atomic::Ordering::SeqCst);
+    let why = if terminated { "stopped by SIGTERM" } else { "interrupted" };
+    if checkpoint.is_file() {
+        eprintln!(
+            "strata: {why}; the samples so far are saved in {} (run the same command again to go on from them)",
+            checkpoint.display()
+        );
+    } else {
+        eprintln!("strata: {why} before the first checkpoint; nothing was written");
+    }
+    std::process::exit(if terminated { i32::from(scale_out::EXIT_TERMINATED) } else { 130 });
 }
 
 /// What `--time`, `--turntable` and `--frames` ask for (at most one of them).
@@ -463,7 +533,7 @@ fn write_picture(
 
 /// What a render produced: the distributed-ray-traced frame, or the raster preview.
 enum Picture {
-    Rendered(strata::render::frame::RenderedFrame),
+    Rendered(Box<strata::render::frame::RenderedFrame>),
     Preview(strata::output::Frame),
 }
 

@@ -19,7 +19,7 @@ use crate::vk::descriptors::DescriptorSet;
 use crate::vk::pipeline::{Binding, Pipeline, RayTracingDesc};
 use crate::vk::sampler::{Sampler, SamplerDesc};
 use crate::vk::shader_binding_table::ShaderBindingTable;
-use crate::vk::{Buffer, Device, Image};
+use crate::vk::{Buffer, Device};
 use anyhow::{anyhow, Result};
 use ash::vk;
 use std::sync::Arc;
@@ -114,7 +114,8 @@ pub struct AccumulatePass {
 pub struct AccumulateInputs<'a> {
     pub tlas: &'a AccelerationStructure,
     pub gbuffer: &'a GBuffer,
-    pub accumulation: &'a Image,
+    /// Per pixel, the fixed-point sums of its samples (strata::partial).
+    pub sums: &'a Buffer,
     pub materials: &'a GBufferMaterials,
     pub lights: &'a Buffer,
     pub primitives: &'a Buffer,
@@ -225,7 +226,7 @@ impl AccumulatePass {
             // Every G-buffer attachment but the ids, which the next binding reads as unsigned integers.
             Binding::array(ACCUMULATE_BINDING_GBUFFER, D::COMBINED_IMAGE_SAMPLER, IDS as u32),
             Binding::new(ACCUMULATE_BINDING_GBUFFER_IDS, D::COMBINED_IMAGE_SAMPLER),
-            Binding::new(ACCUMULATE_BINDING_ACCUMULATION, D::STORAGE_IMAGE),
+            Binding::new(ACCUMULATE_BINDING_SUMS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_MATERIALS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_LIGHTS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_PRIMITIVES, D::STORAGE_BUFFER),
@@ -276,7 +277,7 @@ impl AccumulatePass {
                 ACCUMULATE_BINDING_GBUFFER_IDS,
                 &[(inputs.gbuffer.color[IDS].view, self.gbuffer_sampler.raw)],
             )
-            .storage_image(ACCUMULATE_BINDING_ACCUMULATION, inputs.accumulation)
+            .storage_buffer(ACCUMULATE_BINDING_SUMS, inputs.sums)
             .storage_buffer(ACCUMULATE_BINDING_MATERIALS, &inputs.materials.buffer)
             .storage_buffer(ACCUMULATE_BINDING_LIGHTS, inputs.lights)
             .storage_buffer(ACCUMULATE_BINDING_PRIMITIVES, inputs.primitives)

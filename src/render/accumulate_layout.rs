@@ -137,7 +137,8 @@ pub const DIRECT_BSDF_SAMPLING: u32 = 2;
 pub struct ResolvePush {
     pub width: u32,
     pub height: u32,
-    pub inv_samples: f32,
+    /// N, the samples the sums hold.
+    pub samples: u32,
     /// 2^exposure.
     pub exposure_scale: f32,
     /// 0: clamp, 1: filmic.

@@ -18,7 +18,7 @@ use crate::output::Frame;
 use crate::scene::settings::{Backdrop, Primary, RenderSettings, SamplerKind};
 use crate::scene::{Projection, Scene};
 use crate::vk::accel::DynamicTlas;
-use crate::vk::commands::{image_barrier, memory_barrier, submit_and_wait, Access};
+use crate::vk::commands::{buffer_barrier, image_barrier, memory_barrier, submit_and_wait, Access};
 use crate::vk::readback::read_image;
 use crate::vk::timer::TimestampPool;
 use crate::vk::{Buffer, Device, Image, MemoryLocation};
@@ -79,6 +79,10 @@ pub struct FrameOptions {
     pub luminance_moments: bool,
     /// Break the render on purpose: only for `strata check`'s canaries, which must fail their comparisons.
     pub sabotage: Sabotage,
+    /// Render only the samples `start..end` of the frame's `spp` (a part of a render split over machines).
+    pub samples: Option<(u32, u32)>,
+    /// Read the samples' sums back into [`RenderedFrame::sums`].
+    pub keep_sums: bool,
     /// Bytes to move the ray-tracing pipeline's shader binding table off its alignment: only for the test that
     /// shows the validation layer catches a misaligned table. 0 in every render.
     #[doc(hidden)]
@@ -123,6 +127,7 @@ impl PassTimes {
 pub struct FrameStats {
     /// How the accumulation pass traced its rays.
     pub trace: TracePath,
+    /// The samples this render made (all of the frame's, or a part's).
     pub samples: u32,
     pub width: u32,
     pub height: u32,
@@ -150,6 +155,8 @@ pub struct RenderedFrame {
     pub ray_log: Vec<super::ray_probe::ProbeRay>,
     /// The exposure (stops) the display image was made with: the setting, or what auto exposure chose.
     pub exposure: f32,
+    /// With [`FrameOptions::keep_sums`]: the samples' fixed-point sums, for a partial result or a checkpoint.
+    pub sums: Option<crate::partial::PartialSums>,
 }
 
 /// The error a render returns when its progress callback asked it to stop (Ctrl-C).
@@ -235,10 +242,54 @@ pub fn render_frame(
     options: &FrameOptions,
     progress: &mut dyn FnMut(u32, u32) -> bool,
 ) -> Result<RenderedFrame> {
+    render_samples(device, scene, on_gpu, settings, options, Continuation::default(), progress)
+}
+
+/// Where a render's sums start from and where they are saved as it goes (`--resume`, `--checkpoint`).
+#[derive(Default)]
+pub struct Continuation<'a> {
+    /// Sums to start from (a checkpoint of this render): its samples are not rendered again. None: zero.
+    pub resume: Option<&'a crate::partial::PartialSums>,
+    /// Called with the sums so far once `every` has passed since the last call (between sample batches), and
+    /// once more when the render is interrupted.
+    pub checkpoint: Option<Checkpoint<'a>>,
+}
+
+pub struct Checkpoint<'a> {
+    pub every: std::time::Duration,
+    pub save: &'a mut dyn FnMut(&crate::partial::PartialSums) -> Result<()>,
+}
+
+/// [`render_frame`] for the samples `options.samples` (of `settings.spp`; all of them when None) on top of the
+/// sums `continuation.resume` already holds. The resolve makes the mean of every sample the sums then hold;
+/// `options.keep_sums` reads the sums back for a part.
+pub fn render_samples(
+    device: &Arc<Device>,
+    scene: &Scene,
+    on_gpu: &SceneOnGpu,
+    settings: &RenderSettings,
+    options: &FrameOptions,
+    continuation: Continuation<'_>,
+    progress: &mut dyn FnMut(u32, u32) -> bool,
+) -> Result<RenderedFrame> {
+    let Continuation { resume, mut checkpoint } = continuation;
     let (width, height, spp) = (settings.width, settings.height, settings.spp);
     if width == 0 || height == 0 || spp == 0 {
         bail!("nothing to render: {width}x{height} pixels, {spp} samples per pixel");
     }
+    let (range_start, range_end) = options.samples.unwrap_or((0, spp));
+    // An empty range is what a render resumed from a checkpoint that holds all of its samples has left.
+    if range_start > range_end || range_end > spp || (range_start == range_end && resume.is_none()) {
+        bail!("samples {range_start}..{range_end} are not a range within the frame's {spp}");
+    }
+    if let Some(r) = resume {
+        r.check_fits(width, height, spp)?;
+        if let Some((a, b)) = r.samples.overlap(&crate::partial::SampleSet::range(range_start, range_end)) {
+            bail!("the sums to go on from hold samples {a}..{b} already");
+        }
+    }
+    // The samples the sums hold when this run ends, and what the resolve divides them by.
+    let held = resume.map_or(0, |r| r.samples.len()) + (range_end - range_start);
     let started = std::time::Instant::now();
     let extent = vk::Extent2D { width, height };
     let traced = settings.primary == Primary::Rays;
@@ -248,6 +299,9 @@ pub fn render_frame(
         tone_map: settings.tone_map,
         transparent: backdrop == Backdrop::Transparent,
     };
+    if range_start == range_end {
+        return resolve_only(device, settings, resume.expect("checked above"), look, options.keep_sums);
+    }
     let gbuffer_pass = GBufferPass::new(device)?;
     let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
     // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
@@ -258,6 +312,16 @@ pub fn render_frame(
 
     let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
     let accumulation = Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?;
+    // Per pixel, the fixed-point sums of its samples (fixed_point.glsl): what makes the total independent of the
+    // samples' order and grouping.
+    let sums = Buffer::new(
+        device,
+        "sample sums",
+        u64::from(width) * u64::from(height) * crate::partial::BYTES_PER_PIXEL,
+        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+        MemoryLocation::GpuOnly,
+        16,
+    )?;
     let display = Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?;
 
     // Lights per sample slot; the count can only shrink over the shutter (degenerate triangles drop out).
@@ -299,7 +363,7 @@ pub fn render_frame(
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &tlas.structure,
         gbuffer: &gbuffer,
-        accumulation: &accumulation,
+        sums: &sums,
         materials: &materials,
         lights: &lights,
         primitives: &ray_scene.records,
@@ -319,7 +383,7 @@ pub fn render_frame(
         None
     };
     let resolve = ResolvePass::new(device)?;
-    let resolve_set = resolve.descriptor_set(&accumulation, &display)?;
+    let resolve_set = resolve.descriptor_set(&sums, &accumulation, &display)?;
     let timer = if options.timestamps {
         Some(TimestampPool::new(device, "frame timestamps", batch * TIMESTAMPS_PER_SAMPLE + 2)?)
     } else {
@@ -327,19 +391,33 @@ pub fn render_frame(
     };
     let device_bytes = device.allocator().generate_report().total_allocated_bytes;
     let gbuffer_bytes = if traced { 0 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
-    let image_bytes = u64::from(width) * u64::from(height) * (gbuffer_bytes + 16 + 4);
+    let image_bytes = u64::from(width) * u64::from(height) * (gbuffer_bytes + 16 + 4 + crate::partial::BYTES_PER_PIXEL);
 
     let sampler = sampler_index(settings.sampler);
     let seed = seed32(settings.seed);
     let mut times = PassTimes::default();
     let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
-    let mut done = 0u32;
+    let mut done = range_start;
     let mut skipped_warned = false;
-    if !progress(0, spp) {
+    let initial = match resume {
+        Some(r) => Some(Buffer::with_data(device, "resumed sums", &r.counts, vk::BufferUsageFlags::TRANSFER_SRC, 16)?),
+        None => None,
+    };
+    // What the sums hold once the samples up to `done` are in: read back for a checkpoint or a part.
+    let held_sums = |done: u32| -> Result<crate::partial::PartialSums> {
+        let counts = crate::vk::readback::read_buffer::<u64>(device, &sums, Access::COMPUTE_READ_WRITE)?;
+        let mut samples = crate::partial::SampleSet::range(range_start, done);
+        if let Some(r) = resume {
+            samples = r.samples.union(&samples)?;
+        }
+        Ok(crate::partial::PartialSums { width, height, spp, samples, counts })
+    };
+    let mut last_checkpoint = std::time::Instant::now();
+    if !progress(0, range_end - range_start) {
         return Err(Interrupted.into());
     }
-    while done < spp {
-        let count = batch.min(spp - done);
+    while done < range_end {
+        let count = batch.min(range_end - done);
         // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
         let mut samples = Vec::with_capacity(count as usize);
         for slot in 0..count {
@@ -391,10 +469,10 @@ pub fn render_frame(
         if let Some(timer) = &timer {
             timer.reset();
         }
-        let last = done + count == spp;
+        let last = done + count == range_end;
         submit_and_wait(device, "sample batch", |cmd| {
             for (slot, (camera_sample, push)) in samples.iter().enumerate() {
-                let first = done == 0 && slot == 0;
+                let first = done == range_start && slot == 0;
                 let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
                     if let Some(timer) = &timer {
                         timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
@@ -419,13 +497,15 @@ pub fn render_frame(
                 }
                 stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
                 if first {
-                    image_barrier(
-                        device,
-                        cmd,
-                        &accumulation,
-                        (vk::ImageLayout::UNDEFINED, Access::NONE),
-                        (vk::ImageLayout::GENERAL, Access::COMPUTE_READ_WRITE),
-                    );
+                    // The sums start from zero, or from what a checkpoint or another part held.
+                    match &initial {
+                        Some(from) => {
+                            let region = [vk::BufferCopy::default().size(from.size)];
+                            unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, sums.raw, &region) };
+                        }
+                        None => unsafe { device.raw.cmd_fill_buffer(cmd, sums.raw, 0, vk::WHOLE_SIZE, 0) },
+                    }
+                    buffer_barrier(device, cmd, &sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
                 } else {
                     memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
                 }
@@ -438,14 +518,16 @@ pub fn render_frame(
                     timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, batch * TIMESTAMPS_PER_SAMPLE);
                 }
                 memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-                image_barrier(
-                    device,
-                    cmd,
-                    &display,
-                    (vk::ImageLayout::UNDEFINED, Access::NONE),
-                    (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
-                );
-                resolve.record(cmd, &resolve_set, extent, spp, &look);
+                for image in [&display, &accumulation] {
+                    image_barrier(
+                        device,
+                        cmd,
+                        image,
+                        (vk::ImageLayout::UNDEFINED, Access::NONE),
+                        (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+                    );
+                }
+                resolve.record(cmd, &resolve_set, extent, held, &look);
                 if let Some(timer) = &timer {
                     timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, batch * TIMESTAMPS_PER_SAMPLE + 1);
                 }
@@ -471,7 +553,14 @@ pub fn render_frame(
             }
         }
         done += count;
-        if !progress(done, spp) && done < spp {
+        let stop = !progress(done - range_start, range_end - range_start) && done < range_end;
+        if let Some(Checkpoint { every, save }) = &mut checkpoint {
+            if done < range_end && (stop || last_checkpoint.elapsed() >= *every) {
+                save(&held_sums(done)?)?;
+                last_checkpoint = std::time::Instant::now();
+            }
+        }
+        if stop {
             return Err(Interrupted.into());
         }
     }
@@ -479,12 +568,19 @@ pub fn render_frame(
     let linear = Frame::new(width, height, linear.to_rgba_f32()?)?;
     let mut exposure = settings.exposure;
     if settings.auto_exposure {
-        // The accumulation now holds the mean: resolve it again (× 1) at the exposure the picture asks for.
+        // Resolve the sums again at the exposure the picture asks for.
         exposure = auto_exposure(&linear, look.transparent);
         let look = super::resolve::DisplayLook { exposure, ..look };
         submit_and_wait(device, "auto-exposure resolve", |cmd| {
-            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-            resolve.record(cmd, &resolve_set, extent, 1, &look);
+            // The read-back left the accumulation a transfer source; the display is still as the resolve left it.
+            image_barrier(
+                device,
+                cmd,
+                &accumulation,
+                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, Access::TRANSFER_READ),
+                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+            );
+            resolve.record(cmd, &resolve_set, extent, held, &look);
             memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
             Ok(())
         })?;
@@ -492,10 +588,10 @@ pub fn render_frame(
     let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
     let stats = FrameStats {
         trace: accumulate.path(),
-        samples: spp,
+        samples: range_end - range_start,
         width,
         height,
-        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(spp) } else { 0 },
+        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(range_end - range_start) } else { 0 },
         shadow_rays,
         secondary_rays,
         seconds: started.elapsed().as_secs_f64(),
@@ -507,7 +603,41 @@ pub fn render_frame(
         Some(log) => log.rays()?,
         None => Vec::new(),
     };
-    Ok(RenderedFrame { linear, display, stats, ray_log, exposure })
+    let sums = if options.keep_sums { Some(held_sums(range_end)?) } else { None };
+    Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
+}
+
+/// A render with nothing left to sample: the frame its sums make.
+fn resolve_only(
+    device: &Arc<Device>,
+    settings: &RenderSettings,
+    sums: &crate::partial::PartialSums,
+    look: super::resolve::DisplayLook,
+    keep_sums: bool,
+) -> Result<RenderedFrame> {
+    let started = std::time::Instant::now();
+    let resolved = super::resolve::resolve_sums(device, sums, look, settings.auto_exposure)?;
+    let stats = FrameStats {
+        trace: TracePath::choose(settings.trace, device)?,
+        samples: 0,
+        width: sums.width,
+        height: sums.height,
+        camera_rays: 0,
+        shadow_rays: 0,
+        secondary_rays: 0,
+        seconds: started.elapsed().as_secs_f64(),
+        pass_times: None,
+        device_bytes: device.allocator().generate_report().total_allocated_bytes,
+        image_bytes: 0,
+    };
+    Ok(RenderedFrame {
+        linear: resolved.linear,
+        display: resolved.display,
+        stats,
+        ray_log: Vec::new(),
+        exposure: resolved.exposure,
+        sums: keep_sums.then(|| sums.clone()),
+    })
 }
 
 /// The middle grey photographic tone reproduction maps the log-average luminance to (Reinhard et al.,

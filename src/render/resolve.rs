@@ -3,11 +3,12 @@
 use super::accumulate_layout::ResolvePush;
 use crate::scene::settings::ToneMap;
 use crate::shaders;
-use crate::shaders::constants::{RESOLVE_BINDING_ACCUMULATION, RESOLVE_BINDING_DISPLAY, RESOLVE_TILE_SIZE};
+use crate::shaders::constants::RESOLVE_TILE_SIZE;
+use crate::shaders::constants::{RESOLVE_BINDING_ACCUMULATION, RESOLVE_BINDING_DISPLAY, RESOLVE_BINDING_SUMS};
 use crate::vk::commands::labelled;
 use crate::vk::descriptors::DescriptorSet;
 use crate::vk::pipeline::{Binding, Pipeline};
-use crate::vk::{Device, Image};
+use crate::vk::{Buffer, Device, Image};
 use anyhow::Result;
 use ash::vk;
 use std::sync::Arc;
@@ -34,6 +35,7 @@ impl ResolvePass {
         vec![
             Binding::new(RESOLVE_BINDING_ACCUMULATION, vk::DescriptorType::STORAGE_IMAGE),
             Binding::new(RESOLVE_BINDING_DISPLAY, vk::DescriptorType::STORAGE_IMAGE),
+            Binding::new(RESOLVE_BINDING_SUMS, vk::DescriptorType::STORAGE_BUFFER),
         ]
     }
 
@@ -48,9 +50,13 @@ impl ResolvePass {
         Ok(Self { pipeline, device: device.clone() })
     }
 
-    pub fn descriptor_set(&self, accumulation: &Image, display: &Image) -> Result<DescriptorSet> {
+    /// `sums`: the samples' fixed-point sums (strata::partial); `accumulation` receives the mean, `display` the
+    /// exposed, tone-mapped sRGB picture.
+    pub fn descriptor_set(&self, sums: &Buffer, accumulation: &Image, display: &Image) -> Result<DescriptorSet> {
         let set = self.pipeline.new_descriptor_set("resolve set")?;
-        set.storage_image(RESOLVE_BINDING_ACCUMULATION, accumulation).storage_image(RESOLVE_BINDING_DISPLAY, display);
+        set.storage_image(RESOLVE_BINDING_ACCUMULATION, accumulation)
+            .storage_image(RESOLVE_BINDING_DISPLAY, display)
+            .storage_buffer(RESOLVE_BINDING_SUMS, sums);
         Ok(set)
     }
 
@@ -67,7 +73,7 @@ impl ResolvePass {
         let push = ResolvePush {
             width: extent.width,
             height: extent.height,
-            inv_samples: 1.0 / samples.max(1) as f32,
+            samples: samples.max(1),
             exposure_scale: exposure.exp2(),
             tone_map: match tone_map {
                 ToneMap::Clamp => 0,
@@ -88,4 +94,68 @@ impl ResolvePass {
             };
         });
     }
+}
+
+/// A frame made from sums alone: the linear mean (for EXR), the display picture (for PNG) and the exposure it
+/// was made with.
+pub struct ResolvedSums {
+    pub linear: crate::output::Frame,
+    pub display: Vec<u8>,
+    pub exposure: f32,
+}
+
+/// Resolves sums that are already summed (merged parts, or a checkpoint that holds every sample) with the same
+/// pass and push constants a render ends with, so the bits are the ones that render makes. With
+/// `auto_exposure` the exposure is chosen from the mean as a render chooses it.
+pub fn resolve_sums(
+    device: &Arc<Device>,
+    sums: &crate::partial::PartialSums,
+    look: DisplayLook,
+    auto_exposure: bool,
+) -> Result<ResolvedSums> {
+    use crate::vk::commands::{image_barrier, submit_and_wait, Access};
+    use crate::vk::readback::read_image;
+    sums.check_fits(sums.width, sums.height, sums.spp)?;
+    let extent = vk::Extent2D { width: sums.width, height: sums.height };
+    let upload = Buffer::with_data(device, "merged sums", &sums.counts, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+    let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+    let accumulation = Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?;
+    let display = Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?;
+    let pass = ResolvePass::new(device)?;
+    let set = pass.descriptor_set(&upload, &accumulation, &display)?;
+    let held = sums.samples.len();
+    submit_and_wait(device, "resolve sums", |cmd| {
+        for image in [&display, &accumulation] {
+            image_barrier(
+                device,
+                cmd,
+                image,
+                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+            );
+        }
+        pass.record(cmd, &set, extent, held, &look);
+        Ok(())
+    })?;
+    let linear = read_image(device, &accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?;
+    let linear = crate::output::Frame::new(sums.width, sums.height, linear.to_rgba_f32()?)?;
+    let mut exposure = look.exposure;
+    if auto_exposure {
+        exposure = super::frame::auto_exposure(&linear, look.transparent);
+        let look = DisplayLook { exposure, ..look };
+        submit_and_wait(device, "auto-exposure resolve", |cmd| {
+            // The read-back left the accumulation a transfer source; the display is still as the resolve left it.
+            image_barrier(
+                device,
+                cmd,
+                &accumulation,
+                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, Access::TRANSFER_READ),
+                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+            );
+            pass.record(cmd, &set, extent, held, &look);
+            Ok(())
+        })?;
+    }
+    let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
+    Ok(ResolvedSums { linear, display, exposure })
 }

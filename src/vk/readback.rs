@@ -112,3 +112,23 @@ pub fn read_image(
     })?;
     Ok(Readback { width, height, format: image.format, row_pitch, texel_size: texel, bytes: buffer.mapped()?.to_vec() })
 }
+
+/// Copies a device-local buffer (last touched by `last_access`) to the host as `T`s.
+pub fn read_buffer<T: bytemuck::Pod>(device: &Arc<Device>, buffer: &Buffer, last_access: Access) -> Result<Vec<T>> {
+    let staging = Buffer::new(
+        device,
+        &format!("{} readback", buffer.name),
+        buffer.size,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+        1,
+    )?;
+    submit_and_wait(device, &format!("read back {}", buffer.name), |cmd| {
+        buffer_barrier(device, cmd, buffer, last_access, Access::TRANSFER_READ);
+        let region = [vk::BufferCopy::default().size(buffer.size)];
+        unsafe { device.raw.cmd_copy_buffer(cmd, buffer.raw, staging.raw, &region) };
+        buffer_barrier(device, cmd, &staging, Access::TRANSFER_WRITE, Access::HOST_READ);
+        Ok(())
+    })?;
+    staging.read()
+}
