@@ -21,10 +21,16 @@ export DEBIAN_FRONTEND=noninteractive
 . /etc/os-release
 echo "setup: ${PRETTY_NAME:-unknown system}"
 
-# The base packages, from the distribution's main archive.
+# The base packages, from the distribution's main archive. `--runtime` (a container that only runs a built
+# strata, deploy/container/Dockerfile) takes the Vulkan loader, the layer and vulkaninfo, not the build tools.
 base_pkgs=(libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
            libshaderc-dev glslang-dev glslang-tools spirv-tools
            pkg-config build-essential ca-certificates)
+runtime_only=
+if [ "${1:-}" = --runtime ]; then
+  runtime_only=1
+  base_pkgs=(libvulkan1 vulkan-validationlayers vulkan-tools ca-certificates)
+fi
 
 have_ray_query() {
   command -v vulkaninfo >/dev/null || return 1
@@ -96,7 +102,9 @@ if [ "$rq" != yes ] || [ "$rtp" != yes ]; then
   exit 1
 fi
 # Rust is the user's (rustup); Debian 12's own cargo is too old for strata's dependencies.
-if command -v cargo >/dev/null; then
+if [ -n "$runtime_only" ]; then
+  :
+elif command -v cargo >/dev/null; then
   echo "setup: cargo:             $(cargo --version)"
 else
   echo "setup: note: no cargo on PATH; install Rust 1.85 or newer (rustup) to build strata" >&2

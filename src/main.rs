@@ -29,12 +29,14 @@ enum Command {
     #[command(after_help = "Each of the --spp samples rasterizes a G-buffer at its own lens point, shutter time and \
                             sub-pixel jitter, then the accumulation pass casts shadow, gloss and translucency rays \
                             (with ray queries, or through a ray-tracing pipeline: --trace). The output format follows the extension of -o (.png or .exr); files are \
-                            written atomically, so a failed or interrupted render (Ctrl-C) leaves nothing behind.\n\n\
+                            written atomically, so a failed or interrupted render (Ctrl-C) leaves nothing behind (--checkpoint keeps the samples so far, and the same command goes on from them).\n\n\
                             Examples:\n  strata render scenes/showcase.toml -o showcase.png\n  \
                             strata render scenes/dof.toml -o dof.png --spp 64 --aperture 0.05 --focus 3\n  \
                             strata render scenes/motion.toml -o motion.exr --shutter 0:0.5 --sampler multi-jittered\n  \
                             strata render scenes/cornell.toml -o cornell.png --spp 256 --sampler sobol --indirect\n  \
-                            strata render Box.gltf -o box.png --size 512x512 --json --quiet --validate")]
+                            strata render Box.gltf -o box.png --size 512x512 --json --quiet --validate\n  \
+                            strata render scenes/showcase.toml -o part.exr --spp 1024 --shard auto --checkpoint ck.exr \
+                            # a Slurm array task (docs/scale-out.md)")]
     Render(Box<RenderArgs>),
     /// List every Vulkan device with its driver, API version and ray-query support, and whether the
     /// Khronos validation layer is installed.
@@ -62,9 +64,14 @@ enum Command {
     Check(CheckArgs),
     /// Merge parts of one frame, rendered anywhere (`strata render --samples A..B`, `--shard K/N`, or a
     /// checkpoint), into the frame: byte for byte what one render of every sample writes.
-    #[command(
-        after_help = "The parts must come from one render (the same scene, settings, seed, strata version                             and device: each part's header says) and hold every sample of the frame exactly once;                             otherwise the error names the gap, the overlap or the part that differs, and nothing                             is written. docs/scale-out.md shows Slurm and Kubernetes set-ups.\n\n                            Examples:\n  strata render scenes/showcase.toml -o a.exr --samples 0..32\n                              strata render scenes/showcase.toml -o b.exr --samples 32..64\n                              strata merge a.exr b.exr -o showcase.png\n                              strata merge parts/*.exr -o frame.exr --remove-parts"
-    )]
+    #[command(after_help = "The parts must come from one render (the same scene, settings, seed, strata version and \
+                      device: each part's header says) and hold every sample of the frame exactly once; otherwise \
+                      the error names the gap, the overlap or the part that differs, and nothing is written. \
+                      docs/scale-out.md shows Slurm and Kubernetes set-ups.\n\n\
+                      Examples:\n  strata render scenes/showcase.toml -o a.exr --samples 0..32\n  \
+                      strata render scenes/showcase.toml -o b.exr --samples 32..64\n  \
+                      strata merge a.exr b.exr -o showcase.png\n  \
+                      strata merge parts/*.exr -o frame.exr --remove-parts")]
     Merge(MergeArgs),
 }
 

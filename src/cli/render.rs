@@ -311,6 +311,7 @@ fn render_scene(
                 exr.as_deref(),
                 started.elapsed().as_secs_f64(),
                 device_name,
+                part_out.as_ref().and(part_plan.as_ref()).filter(|p| p.writes_part).map(|p| p.target()),
             );
             return Ok(());
         }
@@ -326,6 +327,7 @@ fn render_scene(
             exr.as_deref(),
             frame_started.elapsed().as_secs_f64(),
             device_name,
+            None,
         );
     }
     drop(on_gpu);
@@ -477,6 +479,7 @@ fn report(
     exr: Option<&std::path::Path>,
     seconds: f64,
     device: String,
+    part: Option<(u32, u32)>,
 ) {
     let mut written = vec![output.display().to_string()];
     written.extend(exr.map(|p| p.display().to_string()));
@@ -485,6 +488,7 @@ fn report(
         width: settings.width,
         height: settings.height,
         spp: if args.preview { 1 } else { settings.spp },
+        part,
         sampler: if args.preview { "preview" } else { settings.sampler.name() },
         primary: if args.preview { "raster" } else { settings.primary.name() },
         trace: match picture {

@@ -230,6 +230,11 @@ impl FramePart {
         Ok((rendered, part))
     }
 
+    /// The samples this run's result holds when it is done.
+    pub fn target(&self) -> (u32, u32) {
+        self.target
+    }
+
     /// The checkpoint this run saves to, if any.
     pub fn checkpoint(&self) -> Option<&Path> {
         self.checkpoint.as_deref()

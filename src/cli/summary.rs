@@ -5,6 +5,8 @@ pub struct Summary {
     pub width: u32,
     pub height: u32,
     pub spp: u32,
+    /// The samples a part holds (`--samples`, `--shard`), when this run wrote a part rather than the frame.
+    pub part: Option<(u32, u32)>,
     pub sampler: &'static str,
     /// Where visible surfaces came from: "raster" or "rays".
     pub primary: &'static str,
@@ -25,6 +27,19 @@ pub struct Summary {
 }
 
 impl Summary {
+    /// Samples this run rendered per pixel: a part's, or the frame's.
+    fn rendered_samples(&self) -> u32 {
+        self.part.map_or(self.spp, |(a, b)| b - a)
+    }
+
+    /// "16 spp", or for a part "samples 8..16 of 16 spp".
+    fn samples_text(&self) -> String {
+        match self.part {
+            Some((a, b)) => format!("samples {a}..{b} of {} spp", self.spp),
+            None => format!("{} spp", self.spp),
+        }
+    }
+
     /// (camera rays, shadow rays, secondary rays).
     fn rays(&self) -> (u64, u64, u64) {
         self.stats.as_ref().map(|s| (s.camera_rays, s.shadow_rays, s.secondary_rays)).unwrap_or((0, 0, 0))
@@ -35,12 +50,12 @@ impl Summary {
         let render_seconds = self.stats.as_ref().map(|s| s.seconds).unwrap_or(self.seconds).max(1e-9);
         let camera_part = if camera > 0 { format!("{camera} camera + ") } else { String::new() };
         format!(
-            "strata: wrote {} ({}x{}, {} spp {}, {} primary, {} tracing{}{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
+            "strata: wrote {} ({}x{}, {} {}, {} primary, {} tracing{}{}, {} triangles) on {} in {:.2} s: {:.2} samples/s, \
              {:.2} M rays/s ({camera_part}{} shadow + {} secondary rays)",
             self.written.join(" and "),
             self.width,
             self.height,
-            self.spp,
+            self.samples_text(),
             self.sampler,
             self.primary,
             self.trace,
@@ -49,7 +64,7 @@ impl Summary {
             self.triangles,
             self.device,
             self.seconds,
-            f64::from(self.spp) / render_seconds,
+            f64::from(self.rendered_samples()) / render_seconds,
             (camera + shadow + secondary) as f64 / render_seconds / 1e6,
             shadow,
             secondary
@@ -72,7 +87,8 @@ impl Summary {
             "seed": self.seed,
             "seconds": self.seconds,
             "render_seconds": render_seconds,
-            "samples_per_second": f64::from(self.spp) / render_seconds,
+            "samples_per_second": f64::from(self.rendered_samples()) / render_seconds,
+            "part": self.part.map(|(a, b)| serde_json::json!({ "samples": [a, b] })),
             "camera_rays": camera,
             "shadow_rays": shadow,
             "secondary_rays": secondary,
