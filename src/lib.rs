@@ -105,8 +105,8 @@ pub fn render(
 }
 
 /// What a part of this render belongs to (`partial::file::Provenance`): parts merge only when all of it agrees.
-/// The scene and settings are fingerprinted as rendered (their debug text, hashed as it is written), the device
-/// with its driver and the way it traces, since another device may round differently.
+/// The scene and settings are fingerprinted as rendered (their debug text, hashed as it is written; not the paths
+/// they came from), the device with its driver and the way it traces, since another device may round differently.
 pub fn part_provenance(
     gpu: &vk::Gpu,
     scene: &scene::Scene,
@@ -119,8 +119,35 @@ pub fn part_provenance(
         .chars()
         .map(|c| if c.is_ascii() && !c.is_ascii_control() { c } else { '?' })
         .collect();
+    // Everything that shapes the picture, spelled out so that a new field of the scene does not compile until it
+    // is placed here; not where the files were read from (shards may see the same files under other paths).
+    let scene::Scene {
+        source: _,
+        warnings: _,
+        meshes,
+        materials,
+        textures,
+        images,
+        nodes,
+        roots,
+        instances,
+        cameras,
+        camera,
+        lights,
+        animations,
+        node_motion,
+        camera_motion,
+        shutter,
+        environment,
+    } = scene;
     let mut scene_hash = hash::Fnv1a::default();
-    write!(scene_hash, "{scene:?}")?;
+    write!(scene_hash, "{meshes:?}{materials:?}{textures:?}{images:?}{nodes:?}{roots:?}{instances:?}{cameras:?}")?;
+    write!(scene_hash, "{camera:?}{lights:?}{animations:?}{node_motion:?}{camera_motion:?}{shutter:?}")?;
+    if let Some(scene::environment::Environment { name: _, width, height, texels, rotation_degrees, intensity }) =
+        environment
+    {
+        write!(scene_hash, "{width} {height} {texels:?} {rotation_degrees:?} {intensity:?}")?;
+    }
     // The settings that change the picture: not where it is written, nor how rays are traced (the device says).
     let picture = scene::settings::RenderSettings { output: None, trace: Default::default(), ..settings.clone() };
     let mut settings_hash = hash::Fnv1a::default();
