@@ -19,7 +19,6 @@ use crate::scene::settings::{Backdrop, Primary, RenderSettings, SamplerKind};
 use crate::scene::{Projection, Scene};
 use crate::vk::accel::DynamicTlas;
 use crate::vk::commands::{buffer_barrier, image_barrier, memory_barrier, submit_and_wait, Access};
-use crate::vk::readback::read_image;
 use crate::vk::timer::TimestampPool;
 use crate::vk::{Buffer, Device, Image, MemoryLocation};
 use anyhow::{bail, Result};
@@ -384,6 +383,12 @@ pub fn render_samples(
     };
     let resolve = ResolvePass::new(device)?;
     let resolve_set = resolve.descriptor_set(&sums, &accumulation, &display)?;
+    let resolved_images = super::resolve::ResolvedImages {
+        set: &resolve_set,
+        accumulation: &accumulation,
+        display: &display,
+        samples: held,
+    };
     let timer = if options.timestamps {
         Some(TimestampPool::new(device, "frame timestamps", batch * TIMESTAMPS_PER_SAMPLE + 2)?)
     } else {
@@ -518,16 +523,7 @@ pub fn render_samples(
                     timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, batch * TIMESTAMPS_PER_SAMPLE);
                 }
                 memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-                for image in [&display, &accumulation] {
-                    image_barrier(
-                        device,
-                        cmd,
-                        image,
-                        (vk::ImageLayout::UNDEFINED, Access::NONE),
-                        (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
-                    );
-                }
-                resolve.record(cmd, &resolve_set, extent, held, &look);
+                resolve.record_fresh(cmd, &resolved_images, &look);
                 if let Some(timer) = &timer {
                     timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, batch * TIMESTAMPS_PER_SAMPLE + 1);
                 }
@@ -564,28 +560,8 @@ pub fn render_samples(
             return Err(Interrupted.into());
         }
     }
-    let linear = read_image(device, &accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_READ_WRITE)?;
-    let linear = Frame::new(width, height, linear.to_rgba_f32()?)?;
-    let mut exposure = settings.exposure;
-    if settings.auto_exposure {
-        // Resolve the sums again at the exposure the picture asks for.
-        exposure = auto_exposure(&linear, look.transparent);
-        let look = super::resolve::DisplayLook { exposure, ..look };
-        submit_and_wait(device, "auto-exposure resolve", |cmd| {
-            // The read-back left the accumulation a transfer source; the display is still as the resolve left it.
-            image_barrier(
-                device,
-                cmd,
-                &accumulation,
-                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, Access::TRANSFER_READ),
-                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
-            );
-            resolve.record(cmd, &resolve_set, extent, held, &look);
-            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
-            Ok(())
-        })?;
-    }
-    let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
+    let super::resolve::ResolvedSums { linear, display, exposure } =
+        resolve.read_out(&resolved_images, look, settings.auto_exposure)?;
     let stats = FrameStats {
         trace: accumulate.path(),
         samples: range_end - range_start,

@@ -113,8 +113,7 @@ pub fn resolve_sums(
     look: DisplayLook,
     auto_exposure: bool,
 ) -> Result<ResolvedSums> {
-    use crate::vk::commands::{image_barrier, submit_and_wait, Access};
-    use crate::vk::readback::read_image;
+    use crate::vk::commands::submit_and_wait;
     sums.check_fits(sums.width, sums.height, sums.spp)?;
     let extent = vk::Extent2D { width: sums.width, height: sums.height };
     let upload = Buffer::with_data(device, "merged sums", &sums.counts, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
@@ -124,38 +123,76 @@ pub fn resolve_sums(
     let pass = ResolvePass::new(device)?;
     let set = pass.descriptor_set(&upload, &accumulation, &display)?;
     let held = sums.samples.len();
+    let images = ResolvedImages { set: &set, accumulation: &accumulation, display: &display, samples: held };
     submit_and_wait(device, "resolve sums", |cmd| {
-        for image in [&display, &accumulation] {
+        pass.record_fresh(cmd, &images, &look);
+        Ok(())
+    })?;
+    pass.read_out(&images, look, auto_exposure)
+}
+
+/// What a recorded resolve wrote into, for [`ResolvePass::read_out`].
+pub struct ResolvedImages<'a> {
+    pub set: &'a DescriptorSet,
+    /// The linear mean, in `GENERAL`, last written by the resolve.
+    pub accumulation: &'a Image,
+    /// The display picture, in `GENERAL`, last written by the resolve.
+    pub display: &'a Image,
+    /// The sample count the resolve divided by.
+    pub samples: u32,
+}
+
+impl ResolvePass {
+    /// Records the resolve into images whose old contents do not matter (both go to `GENERAL`).
+    pub fn record_fresh(&self, cmd: vk::CommandBuffer, images: &ResolvedImages<'_>, look: &DisplayLook) {
+        use crate::vk::commands::{image_barrier, Access};
+        for image in [images.display, images.accumulation] {
             image_barrier(
-                device,
+                &self.device,
                 cmd,
                 image,
                 (vk::ImageLayout::UNDEFINED, Access::NONE),
                 (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
             );
         }
-        pass.record(cmd, &set, extent, held, &look);
-        Ok(())
-    })?;
-    let linear = read_image(device, &accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?;
-    let linear = crate::output::Frame::new(sums.width, sums.height, linear.to_rgba_f32()?)?;
-    let mut exposure = look.exposure;
-    if auto_exposure {
-        exposure = super::frame::auto_exposure(&linear, look.transparent);
-        let look = DisplayLook { exposure, ..look };
-        submit_and_wait(device, "auto-exposure resolve", |cmd| {
-            // The read-back left the accumulation a transfer source; the display is still as the resolve left it.
-            image_barrier(
-                device,
-                cmd,
-                &accumulation,
-                (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, Access::TRANSFER_READ),
-                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
-            );
-            pass.record(cmd, &set, extent, held, &look);
-            Ok(())
-        })?;
+        let extent = images.accumulation.extent;
+        self.record(cmd, images.set, extent, images.samples, look);
     }
-    let display = read_image(device, &display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
-    Ok(ResolvedSums { linear, display, exposure })
+
+    /// Reads a finished resolve back: the linear mean, then — with `auto_exposure` — the resolve again at the
+    /// exposure that maps the mean's log-average to middle grey, then the display picture. The end of every
+    /// render and of every merge, so that both make the same bytes from the same sums.
+    pub fn read_out(
+        &self,
+        images: &ResolvedImages<'_>,
+        look: DisplayLook,
+        auto_exposure: bool,
+    ) -> Result<ResolvedSums> {
+        use crate::vk::commands::{image_barrier, submit_and_wait, Access};
+        use crate::vk::readback::read_image;
+        let device = &self.device;
+        let ResolvedImages { set, accumulation, display, samples } = *images;
+        let linear = read_image(device, accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?;
+        let extent = accumulation.extent;
+        let linear = crate::output::Frame::new(extent.width, extent.height, linear.to_rgba_f32()?)?;
+        let mut exposure = look.exposure;
+        if auto_exposure {
+            exposure = super::frame::auto_exposure(&linear, look.transparent);
+            let look = DisplayLook { exposure, ..look };
+            submit_and_wait(device, "auto-exposure resolve", |cmd| {
+                // The read-back left the accumulation a transfer source; the display is as the resolve left it.
+                image_barrier(
+                    device,
+                    cmd,
+                    accumulation,
+                    (vk::ImageLayout::TRANSFER_SRC_OPTIMAL, Access::TRANSFER_READ),
+                    (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
+                );
+                self.record(cmd, set, extent, samples, &look);
+                Ok(())
+            })?;
+        }
+        let display = read_image(device, display, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?.bytes;
+        Ok(ResolvedSums { linear, display, exposure })
+    }
 }
