@@ -128,6 +128,14 @@ logs=$(ls "$work"/out/strata-shard-*.log | wc -l)
 echo "slurm-check: $shards shards and their merge ran under Slurm in $took s;" \
     "the merged frame equals the single-process render byte for byte"
 
+# A sequence: the shards split a turntable's frames, each written whole, no merge.
+(cd "$work/out" && STRATA=$strata "$repo/deploy/slurm/submit.sh" --wait "$scene" "$work/spin.png" 2 \
+    --size 32x18 --spp 2 --turntable 3 >/dev/null) || fail "the turntable array failed"
+for n in 1 2 3; do
+    [ -f "$work/spin.000$n.png" ] || fail "the turntable array wrote no $work/spin.000$n.png"
+done
+echo "slurm-check: a turntable of 3 frames over 2 shards wrote every frame"
+
 if [ -n "$scaling" ]; then
     big=(--size 480x270 --spp 64 --indirect)
     t0=$(now_ms); "$strata" render "$scene" -o "$work/big.png" "${big[@]}" --quiet

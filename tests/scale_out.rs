@@ -191,8 +191,16 @@ fn merges_that_cannot_be_made_are_clear_errors_that_write_nothing() {
         assert!(!output.exists(), "{name}: a failed merge wrote {}", output.display());
     }
     // The parts that do fit merge, whatever path each machine read the scene by.
-    let out = merge(&[b, a], &output, &[]);
+    let out = merge(&[b, a.clone()], &output, &[]);
     assert!(out.status.success(), "{}", outcome(&out));
+    // And a render that goes on from a part (--resume) renders only the rest, to the same bytes.
+    let single = dir.join("single.png");
+    render(&frame, &single, &[]);
+    let resumed = dir.join("resumed.png");
+    render(&frame, &resumed, &["--resume", path(&a)]);
+    same_bytes(&single, &resumed);
+    same_bytes(&single, &output);
+    assert!(a.exists(), "--resume reads a part; only --checkpoint files are removed");
 }
 
 /// Waits until `file` exists (the first checkpoint), at most a minute.
@@ -299,6 +307,25 @@ fn shards_of_a_turntable_render_their_share_of_the_frames() {
     names.sort();
     // Five frames over two shards: the second takes frames 3 to 5 (5·1/2 = 2 frames go to the first).
     assert_eq!(names, ["spin.0003.png", "spin.0004.png", "spin.0005.png"]);
+    // A shard may hold a single frame of a sequence: it is still that frame, not a part of its samples.
+    let out = strata(&[
+        "render",
+        scene.as_str(),
+        "-o",
+        path(&output),
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "--turntable",
+        "5",
+        "--shard",
+        "1/4",
+        "--validate",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", outcome(&out));
+    assert!(dir.join("spin.0001.png").is_file(), "{}", outcome(&out));
 }
 
 /// The scale-out benchmark runs clean under the layer on a tiny frame and prints its figures.

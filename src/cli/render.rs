@@ -194,12 +194,15 @@ fn render_scene(
     .apply(&mut scene)
     .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
     let lens = scene.camera.as_ref().map(|c| c.lens);
-    let plans = scale_out::frames_of_shard(args, sequence::plan(sequence, args.fps, args.shutter_angle))?;
+    let every_frame = sequence::plan(sequence, args.fps, args.shutter_angle);
+    // One frame splits its samples; a sequence (even one whose shard holds a single frame) splits its frames.
+    let one_frame = every_frame.len() == 1;
+    let plans = scale_out::frames_of_shard(args, every_frame)?;
     if plans.is_empty() {
         eprintln!("strata: this shard has no frames (more shards than frames); nothing to do");
         return Ok(());
     }
-    let part_plan = if plans.len() == 1 && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
+    let part_plan = if one_frame && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         *gpu_slot = Some(Gpu::new(&GpuOptions {
