@@ -339,6 +339,7 @@ fn the_scale_out_benchmark_runs_clean_and_prints_its_figures() {
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(out.status.success(), "{}\n{text}", outcome(&out));
     assert!(text.contains("checkpoint: read back") && text.contains("% of a render"), "{text}");
+    assert!(text.contains("fingerprint of the scene (once per part)") && text.contains("1M-triangle mesh"), "{text}");
     for n in [2, 4, 8, 16] {
         assert!(text.contains(&format!("merge of {n:>2} parts: read + add")), "{text}");
     }

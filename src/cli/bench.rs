@@ -59,7 +59,21 @@ fn bench_scale_out(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         render_samples(&gpu.device, &scene, &on_gpu, &settings, &options, Continuation::default(), &mut |_, _| true)?;
     let frame_s = started.elapsed().as_secs_f64();
     let sums = frame.sums.ok_or_else(|| anyhow!("the render kept no sums"))?;
+    let t = Instant::now();
     let provenance = strata::part_provenance(&gpu, &scene, &settings)?;
+    let fingerprint_ms = t.elapsed().as_secs_f64() * 1e3;
+    // The fingerprint hashes the scene's whole content: what it costs a large mesh, once per part.
+    let mut big = strata::scene::Scene::default();
+    big.meshes.push(strata::scene::Mesh {
+        name: "1M sphere".into(),
+        primitives: vec![strata::scene::shapes::uv_sphere(1.0, 1000, 500, Some(0))],
+    });
+    let t = Instant::now();
+    strata::part_provenance(&gpu, &big, &settings)?;
+    println!(
+        "  fingerprint of the scene (once per part): {fingerprint_ms:.1} ms; a 1M-triangle mesh {:.0} ms",
+        t.elapsed().as_secs_f64() * 1e3
+    );
     let look = PartLook { exposure: 0.0, tone_map: settings.tone_map, transparent: false, auto_exposure: false };
     let dir = std::env::temp_dir().join(format!("strata-bench-scale-out-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
