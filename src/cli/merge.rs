@@ -37,6 +37,15 @@ pub fn merge(args: MergeArgs) -> Result<()> {
             needs: strata::vk::DeviceNeeds::RayTracing,
         })?;
         let log = gpu.validation_log();
+        // The resolve's division may round differently on another device: the bytes are the render's only on its own.
+        let here = &gpu.device.report.name;
+        if !merged.provenance.device.starts_with(here.as_str()) {
+            eprintln!(
+                "warning: the parts were rendered on {}; resolving them on {here} may differ from that device's \
+                 render in the last bits (--device chooses)",
+                merged.provenance.device
+            );
+        }
         let look = DisplayLook {
             exposure: merged.look.exposure,
             tone_map: merged.look.tone_map,
