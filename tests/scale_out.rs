@@ -285,46 +285,34 @@ fn shards_of_a_turntable_render_their_share_of_the_frames() {
     let dir = temp_dir("frames");
     let scene = scene();
     let output = dir.join("spin.png");
-    let out = strata(&[
-        "render",
-        scene.as_str(),
-        "-o",
-        path(&output),
-        "--size",
-        "16x16",
-        "--spp",
-        "2",
-        "--turntable",
-        "5",
-        "--shard",
-        "2/2",
-        "--validate",
-        "--quiet",
-    ]);
-    assert!(out.status.success(), "{}", outcome(&out));
+    let shard_of_five_views = |shard: &str| {
+        let out = strata(&[
+            "render",
+            scene.as_str(),
+            "-o",
+            path(&output),
+            "--size",
+            "16x16",
+            "--spp",
+            "2",
+            "--turntable",
+            "5",
+            "--shard",
+            shard,
+            "--validate",
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{}", outcome(&out));
+        out
+    };
+    shard_of_five_views("2/2");
     let mut names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     names.sort();
     // Five frames over two shards: the second takes frames 3 to 5 (5·1/2 = 2 frames go to the first).
     assert_eq!(names, ["spin.0003.png", "spin.0004.png", "spin.0005.png"]);
     // A shard may hold a single frame of a sequence: it is still that frame, not a part of its samples.
-    let out = strata(&[
-        "render",
-        scene.as_str(),
-        "-o",
-        path(&output),
-        "--size",
-        "16x16",
-        "--spp",
-        "2",
-        "--turntable",
-        "5",
-        "--shard",
-        "1/4",
-        "--validate",
-        "--quiet",
-    ]);
-    assert!(out.status.success(), "{}", outcome(&out));
+    let out = shard_of_five_views("1/4");
     assert!(dir.join("spin.0001.png").is_file(), "{}", outcome(&out));
 }
 

@@ -155,37 +155,9 @@ float light_pdf(GpuLight l, vec3 x, vec3 d, float t) {
     return cos_light > 0.0 && area > 0.0 ? t * t / (cos_light * area) : 0.0;
 }
 
-// Whether the ray (o, d) meets light `l`'s surface in (0, t_max) on an emitting side: intersect_light's test
-// without the radiance, for shadow rays (what paths stop at, shadow rays must not see through).
-bool light_blocks(GpuLight l, vec3 o, vec3 d, float t_max) {
-    float kind = l.position_kind.w;
-    vec3 c = l.position_kind.xyz;
-    if (is_sphere_like(l)) {
-        float r = l.axis_u.w;
-        vec3 oc = o - c;
-        float bq = dot(oc, d);
-        float cq = dot(oc, oc) - r * r;
-        float disc = bq * bq - cq;
-        if (disc < 0.0 || cq <= 0.0) return false;
-        float t = -bq - sqrt(disc);
-        return t > 0.0 && t < t_max;
-    }
-    if (kind != LIGHT_QUAD && kind != LIGHT_DISK) return false;
-    vec3 n = l.normal.xyz;
-    float denom = dot(d, n);
-    if (denom == 0.0 || (denom > 0.0 && l.normal.w == 0.0)) return false;
-    float t = dot(c - o, n) / denom;
-    if (t <= 0.0 || t >= t_max) return false;
-    vec3 p = o + t * d - c;
-    float su = dot(p, l.axis_u.xyz) / dot(l.axis_u.xyz, l.axis_u.xyz);
-    float sv = dot(p, l.axis_v.xyz) / dot(l.axis_v.xyz, l.axis_v.xyz);
-    return kind == LIGHT_QUAD ? (abs(su) <= 1.0 && abs(sv) <= 1.0) : (su * su + sv * sv <= 1.0);
-}
-
-// The distance to light `l`'s surface along the ray (o, d) if it is hit in (0, t_max) on an emitting side, with
-// the radiance it sends back along −d; otherwise −1. Only for lights that are not geometry.
-float intersect_light(GpuLight l, vec3 o, vec3 d, float t_max, out vec3 radiance) {
-    radiance = vec3(0.0);
+// The distance to light `l`'s surface along the ray (o, d) if it is hit in (0, t_max) on an emitting side;
+// otherwise −1. Only for lights that are not geometry (spheres, spots and points with a radius, quads, disks).
+float light_surface_hit(GpuLight l, vec3 o, vec3 d, float t_max) {
     float kind = l.position_kind.w;
     vec3 c = l.position_kind.xyz;
     if (is_sphere_like(l)) {
@@ -196,9 +168,7 @@ float intersect_light(GpuLight l, vec3 o, vec3 d, float t_max, out vec3 radiance
         float disc = bq * bq - cq;
         if (disc < 0.0 || cq <= 0.0) return -1.0;
         float t = -bq - sqrt(disc);
-        if (t <= 0.0 || t >= t_max) return -1.0;
-        radiance = sphere_radiance(l) * spot_falloff(l, normalize(o + t * d - c)) * range_window(l, length(oc));
-        return t;
+        return t > 0.0 && t < t_max ? t : -1.0;
     }
     if (kind != LIGHT_QUAD && kind != LIGHT_DISK) return -1.0;
     vec3 n = l.normal.xyz;
@@ -212,8 +182,25 @@ float intersect_light(GpuLight l, vec3 o, vec3 d, float t_max, out vec3 radiance
     float su = dot(p, l.axis_u.xyz) / dot(l.axis_u.xyz, l.axis_u.xyz);
     float sv = dot(p, l.axis_v.xyz) / dot(l.axis_v.xyz, l.axis_v.xyz);
     bool inside = kind == LIGHT_QUAD ? (abs(su) <= 1.0 && abs(sv) <= 1.0) : (su * su + sv * sv <= 1.0);
-    if (!inside) return -1.0;
-    radiance = l.emission.rgb;
+    return inside ? t : -1.0;
+}
+
+// Whether the ray (o, d) meets light `l`'s surface in (0, t_max) on an emitting side, for shadow rays (what
+// paths stop at, shadow rays must not see through).
+bool light_blocks(GpuLight l, vec3 o, vec3 d, float t_max) {
+    return light_surface_hit(l, o, d, t_max) > 0.0;
+}
+
+// The distance to light `l`'s surface along the ray (o, d) if it is hit in (0, t_max) on an emitting side, with
+// the radiance it sends back along −d; otherwise −1. Only for lights that are not geometry.
+float intersect_light(GpuLight l, vec3 o, vec3 d, float t_max, out vec3 radiance) {
+    radiance = vec3(0.0);
+    float t = light_surface_hit(l, o, d, t_max);
+    if (t < 0.0) return -1.0;
+    vec3 c = l.position_kind.xyz;
+    radiance = is_sphere_like(l)
+        ? sphere_radiance(l) * spot_falloff(l, normalize(o + t * d - c)) * range_window(l, length(o - c))
+        : l.emission.rgb;
     return t;
 }
 #endif

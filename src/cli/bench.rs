@@ -97,7 +97,13 @@ fn bench_scale_out(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             let part = Part {
                 provenance: provenance.clone(),
                 look,
-                sums: strata::partial::PartialSums { counts: back, ..sums.clone() },
+                sums: strata::partial::PartialSums {
+                    width: sums.width,
+                    height: sums.height,
+                    spp: sums.spp,
+                    samples: sums.samples.clone(),
+                    counts: back,
+                },
             };
             let t = Instant::now();
             write_part(&part_path, &part)?;

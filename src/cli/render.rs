@@ -314,7 +314,7 @@ fn render_scene(
                 exr.as_deref(),
                 started.elapsed().as_secs_f64(),
                 device_name,
-                part_out.as_ref().and(part_plan.as_ref()).filter(|p| p.writes_part).map(|p| p.target()),
+                part_plan.as_ref().filter(|p| p.writes_part).map(FramePart::target),
             );
             return Ok(());
         }
