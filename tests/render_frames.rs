@@ -156,7 +156,7 @@ fn regular_sampling_aliases_on_fine_stripes_and_raster_jitter_only_weakens_it() 
     let ((regular, _), (jittered, correlation)) = (error(SamplerKind::Regular), error(SamplerKind::Jittered));
     // 4x4 strata centres against a period just over a quarter pixel: whole pixels come out black or white.
     assert!(regular > 0.4, "regular sampling should show a full-strength moiré here: rms deviation {regular}");
-    // The raster G-buffer shares each sample's jitter between all pixels of its pass (DESIGN.md), so jitter
+    // The raster G-buffer shares each sample's jitter between all pixels of its pass (docs/architecture.md), so jitter
     // cannot turn the beat into independent noise per pixel; it does cut its strength. The reference mode
     // (the next test) is what removes it.
     assert!(jittered < 0.65 * regular, "jittered {jittered} vs regular {regular}");
@@ -184,7 +184,7 @@ fn traced_primary_rays_turn_the_moire_into_noise_with_jitter_but_not_with_regula
     gpu.finish().unwrap();
 }
 
-/// Both ways to find the visible surface shade it with the same material, bump and light code (DESIGN.md: "the
+/// Both ways to find the visible surface shade it with the same material, bump and light code (docs/architecture.md: "the
 /// two modes must agree, which makes each the other's test"). With the regular sampler every pixel of the
 /// reference mode gets the very jitter and lens points the raster pass shares, so the pictures agree pixel by
 /// pixel up to the G-buffer's 8-bit albedo and material channels and pixels on silhouettes.

@@ -1,6 +1,6 @@
 // Blinn bump mapping (Blinn 1978) with a procedural height field; GPU side of src/math/bump.rs.
 // N = Q_u x Q_v, n the shading normal, X = n x Q_v, Y = n x Q_u, D = B_u X - B_v Y,
-// N' = normalize(n + sigma D / |N|), sigma = sign(n . N) so mirrored UVs keep bumps outward (DESIGN.md).
+// N' = normalize(n + sigma D / |N|), sigma = sign(n . N) so mirrored UVs keep bumps outward (docs/architecture.md).
 #ifndef BUMP_GLSL
 #define BUMP_GLSL
 #include "noise.glsl"

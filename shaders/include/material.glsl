@@ -33,7 +33,7 @@ struct MaterialPoint {
 // Evaluates material `m` at a point with vertex colour `vertex_color`, coordinates uv0 (TEXCOORD_0) and uv1,
 // normal `n` (world space, on the geometry's own side) and surface derivatives dpdu, dpdv (world space, with
 // respect to TEXCOORD_0). Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); the normal texture tilts n
-// in the tangent frame of dpdu, dpdv through its transform, then the bump perturbs it (DESIGN.md, "Blinn bump
+// in the tangent frame of dpdu, dpdv through its transform, then the bump perturbs it (docs/architecture.md, "Blinn bump
 // mapping"). `with_height`: also evaluate the height itself (the G-buffer stores it; ray hits skip it).
 MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2 uv1, vec3 n, vec3 dpdu, vec3 dpdv,
                                 vec2 footprint_lod, const bool with_height) {

@@ -35,7 +35,7 @@ void log_ray(uint flags, vec3 origin, float t_min, vec3 dir, float t_max) {
     if (i < log.capacity) log.rays[i] = LoggedRay(origin, t_min, dir, t_max, flags);
 }
 
-// Sampler dimensions (DESIGN.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
+// Sampler dimensions (docs/architecture.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
 // host for the whole image, except pixel and lens in the reference mode (per pixel, here).
 const uint DIM_PIXEL = 0u;
 const uint DIM_LENS = 2u;
@@ -445,7 +445,7 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
 
 // The reference mode's primary ray for pixel p: through the point p + ½ − jitter of the image (the raster
 // pass's jitter convention, camera_sample in src/math/lens.rs) from a point on the thin lens, aimed so that the
-// plane at the focus distance stays sharp (DESIGN.md, "Thin lens"). t_range clips at the near and far depths,
+// plane at the focus distance stays sharp (docs/architecture.md, "Thin lens"). t_range clips at the near and far depths,
 // as the raster pass does.
 void camera_ray(GpuCamera c, ivec2 p, vec2 jitter, vec2 lens_uv, out vec3 origin, out vec3 dir, out vec2 t_range) {
     vec2 ndc = (vec2(p) + 0.5 - jitter) / vec2(pc.width, pc.height) * 2.0 - 1.0;

@@ -254,7 +254,7 @@ pub fn dof_scene(aperture: f32, focus: f32, depth: f32) -> Scene {
 }
 
 /// Depth of field: an edge at depth d through a lens of radius A focused at f spreads over the circle of
-/// confusion 2A·|d − f|/d on the focus plane (DESIGN.md, "Thin lens"), box-filtered by the pixel; in focus it
+/// confusion 2A·|d − f|/d on the focus plane (docs/architecture.md, "Thin lens"), box-filtered by the pixel; in focus it
 /// stays sharp.
 pub fn circle_of_confusion(render: &mut Renderer<'_>) -> Result<Vec<Figure>> {
     let (width, height) = (128u32, 48u32);

@@ -1,5 +1,5 @@
 //! Blinn bump mapping (Blinn 1978, "Simulation of Wrinkled Surfaces") with a procedural Perlin height field.
-//! CPU twin of `shaders/include/bump.glsl`. The formula is fixed in DESIGN.md:
+//! CPU twin of `shaders/include/bump.glsl`. The formula is fixed in docs/architecture.md:
 //! N = Q_u × Q_v, n̂ the shading normal, X = n̂ × Q_v, Y = n̂ × Q_u, D = B_u X − B_v Y,
 //! N' = normalize(n̂ + σ·D/|N|), with σ = sign(n̂ · N) so mirrored UVs keep bumps outward.
 use super::noise::{fbm_with_gradient, noise_with_gradient, turbulence_with_gradient};
@@ -69,7 +69,7 @@ mod tests {
 
     #[test]
     fn plane_normal_is_minus_gradient_over_scale() {
-        // Q = (s·u, s·v, 0): N' ∝ (−B_u/s, −B_v/s, 1) (DESIGN.md), for several UV scales.
+        // Q = (s·u, s·v, 0): N' ∝ (−B_u/s, −B_v/s, 1) (docs/architecture.md), for several UV scales.
         for s in [0.5f32, 1.0, 4.0] {
             let g = Vec2::new(0.3, -0.7);
             let got = perturb_normal(Vec3::Z, Vec3::X * s, Vec3::Y * s, g);

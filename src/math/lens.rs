@@ -1,4 +1,4 @@
-//! The thin-lens camera for raster (DESIGN.md, "Thin lens"): the eye moves to the lens point l on the aperture
+//! The thin-lens camera for raster (docs/architecture.md, "Thin lens"): the eye moves to the lens point l on the aperture
 //! disk and the frustum is sheared so the plane at the focus distance f keeps its place on the image. A point at
 //! depth d then shifts on the image by l·(1/d − 1/f)·(focal length in pixels): its circle of confusion.
 //! Sub-pixel jitter shifts the whole image by a fraction of a pixel.

@@ -71,7 +71,7 @@ pub struct GpuPrimitiveRecord {
     pub uvs1: u64,
 }
 
-/// One sample's camera for primary rays traced per pixel (`Primary::Rays`): the thin lens of DESIGN.md in the
+/// One sample's camera for primary rays traced per pixel (`Primary::Rays`): the thin lens of docs/architecture.md in the
 /// camera's own frame, which the shader maps to world space with `world_from_camera`'s columns.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

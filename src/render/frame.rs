@@ -1,4 +1,4 @@
-//! The sample loop (DESIGN.md, "One frame"): for each of N samples a camera sample (pixel jitter, shutter time,
+//! The sample loop (docs/architecture.md, "One frame"): for each of N samples a camera sample (pixel jitter, shutter time,
 //! lens point from the sampler), the instances and lights at that time, a TLAS rebuild, the G-buffer pass and
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
@@ -26,7 +26,7 @@ use ash::vk;
 use glam::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
-/// Sampler dimensions the host draws once per sample for the whole image (DESIGN.md's order).
+/// Sampler dimensions the host draws once per sample for the whole image (docs/architecture.md's order).
 const DIM_PIXEL: u32 = 0;
 const DIM_TIME: u32 = 1;
 const DIM_LENS: u32 = 2;

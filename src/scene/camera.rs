@@ -10,7 +10,7 @@ pub enum Projection {
     Orthographic { xmag: f32, ymag: f32, znear: f32, zfar: f32 },
 }
 
-/// A thin lens (DESIGN.md, "Thin lens"): aperture radius A in metres and the distance f of the plane in focus.
+/// A thin lens (docs/architecture.md, "Thin lens"): aperture radius A in metres and the distance f of the plane in focus.
 /// A = 0 is the pinhole camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Lens {
