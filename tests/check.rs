@@ -2,24 +2,11 @@
 //! hidden test cases (`--test-cases`: pass, fail, crash, hang, flaky, a validation error) stand in for a broken
 //! driver; the canaries show the comparisons can fail; goldens are blessed into temporary directories, never into
 //! the repository's.
+mod common;
+use common::cli::{stderr, strata, temp_dir};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn strata(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata")).args(args).output().expect("run strata")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-check-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn repo_goldens() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("check/goldens")

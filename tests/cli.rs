@@ -1,32 +1,14 @@
 //! The `strata` command as a user runs it: `info`, a real render of the shared Box sample checked against
 //! geometry and a CPU twin of the preview shading, and bad input that must fail cleanly without writing.
+mod common;
+use common::cli::{outcome, stderr, strata, temp_dir};
 use glam::Vec4Swizzles;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn strata(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_strata")).args(args).output().expect("run strata")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// How a run ended and what it said: the exit status names a signal where stderr may hold nothing.
-fn outcome(o: &Output) -> String {
-    format!("{}; stderr:\n{}", o.status, stderr(o))
-}
-
 fn samples() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf-samples");
     assert!(dir.is_dir(), "the shared glTF samples are missing at {}", dir.display());
-    dir
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
     dir
 }
 
@@ -539,10 +521,6 @@ fn an_environment_and_a_transparent_background_from_the_command_line() {
 }
 
 /// Runs strata with owned arguments.
-fn strata_owned(args: &[String]) -> Output {
-    strata(&args.iter().map(String::as_str).collect::<Vec<_>>())
-}
-
 #[test]
 fn turntables_and_animation_frames_write_their_sequences_and_equal_single_renders() {
     let dir = temp_dir("sequences");
@@ -552,7 +530,7 @@ fn turntables_and_animation_frames_write_their_sequences_and_equal_single_render
             ["render", scene, "--size", "40x30", "--spp", "2", "--quiet", "-o"].iter().map(|s| s.to_string()).collect();
         args.push(path(out));
         args.extend(extra.iter().map(|s| s.to_string()));
-        let out = strata_owned(&args);
+        let out = strata(&args);
         assert!(out.status.success(), "{args:?}: {}", outcome(&out));
     };
     let textured = samples().join("BoxTextured.gltf");
@@ -586,7 +564,7 @@ fn turntables_and_animation_frames_write_their_sequences_and_equal_single_render
         let mut args: Vec<String> = ["render", animated, "-o"].iter().map(|s| s.to_string()).collect();
         args.push(path("bad.png"));
         args.extend(extra.iter().map(|s| s.to_string()));
-        let out = strata_owned(&args);
+        let out = strata(&args);
         assert!(!out.status.success(), "{extra:?} must fail");
         assert!(stderr(&out).contains(says), "{extra:?}: {}", stderr(&out));
     }

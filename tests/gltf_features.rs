@@ -1,6 +1,8 @@
 //! glTF features the shared samples do not exercise, on small files written here: a GLB with a binary chunk,
 //! sparse accessors, normalized integer attributes, the KHR extensions strata implements, alpha modes, morph
 //! targets at the mesh's and nodes' weights, and the warnings for an optional extension and skins it does not.
+mod common;
+use common::cli::temp_dir;
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::{json, Value};
 use strata::scene::{AlphaMode, LightShape};
@@ -179,12 +181,6 @@ fn a_malformed_normal_texture_transform_names_its_material() {
     std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
     let error = format!("{:#}", strata::load_scene(&path).unwrap_err());
     assert!(error.contains("lit glass") && error.contains("KHR_texture_transform"), "{error}");
-}
-
-fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-features-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 #[test]

@@ -1,16 +1,10 @@
 //! Frame files: PNG and EXR round trips through the same crates, extension handling, and atomic writes that
 //! leave the destination untouched when anything fails.
-use std::path::PathBuf;
+mod common;
+use common::cli::temp_dir;
 use strata::output::{
     linear_to_srgb, srgb_to_linear, to_srgb8, write_atomic, write_frame, write_frame_with_layers, Frame,
 };
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-output-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn gradient(width: u32, height: u32) -> Frame {
     let pixels = (0..width * height)

@@ -189,20 +189,6 @@ impl Rgba8 {
         Ok(Self { width: rgba.width(), height: rgba.height(), pixels: rgba.into_raw() })
     }
 
-    pub fn encode_png(&self) -> Result<Vec<u8>> {
-        let mut out = Vec::new();
-        let encoder = image::codecs::png::PngEncoder::new(&mut out);
-        image::ImageEncoder::write_image(
-            encoder,
-            &self.pixels,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgba8,
-        )
-        .context("encoding PNG")?;
-        Ok(out)
-    }
-
     pub fn hash(&self) -> String {
         hash_image(self.width, self.height, &self.pixels)
     }

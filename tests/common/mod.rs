@@ -6,6 +6,7 @@
 //! Within one test process, GPU tests take turns (see `ONE_GPU_AT_A_TIME`).
 #![allow(dead_code)]
 
+pub mod cli;
 pub mod raycast;
 pub mod scenes;
 
