@@ -4,6 +4,7 @@ pub mod bench;
 pub mod check;
 pub mod fatal_signals;
 pub mod hash;
+pub mod input;
 pub mod math;
 pub mod output;
 pub mod partial;
@@ -11,6 +12,7 @@ pub mod render;
 pub mod scene;
 pub mod shaders;
 pub mod vk;
+pub mod write_plan;
 
 use anyhow::{bail, Result};
 use std::path::Path;

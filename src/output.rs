@@ -81,6 +81,11 @@ pub fn to_srgb8(frame: &Frame) -> Vec<u8> {
 /// Writes a data image (normals, depth, ...) as an 8-bit PNG: values in [0, 1] quantized directly, without
 /// the sRGB curve, atomically.
 pub fn write_data_png(path: &Path, frame: &Frame) -> Result<()> {
+    stage_data_png(path, frame)?.commit()
+}
+
+/// [`write_data_png`], staged (see [`Staged`]).
+pub fn stage_data_png(path: &Path, frame: &Frame) -> Result<Staged> {
     if OutputFormat::from_path(path)? != OutputFormat::Png {
         bail!("{}: data images are written as .png", path.display());
     }
@@ -89,7 +94,7 @@ pub fn write_data_png(path: &Path, frame: &Frame) -> Result<()> {
         .iter()
         .flat_map(|p| p.map(|v| (if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) } * 255.0 + 0.5).floor() as u8))
         .collect();
-    write_atomic(path, |file| {
+    stage(path, |file| {
         let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
         image::ImageEncoder::write_image(encoder, &bytes, frame.width, frame.height, image::ExtendedColorType::Rgba8)
             .context("encoding PNG")
@@ -103,27 +108,37 @@ pub fn write_frame(path: &Path, frame: &Frame) -> Result<()> {
 
 /// Like [`write_frame`], with extra named RGBA layers (AOVs) for EXR; PNG output refuses layers.
 pub fn write_frame_with_layers(path: &Path, frame: &Frame, layers: &[(&str, &Frame)]) -> Result<()> {
+    stage_frame_with_layers(path, frame, layers)?.commit()
+}
+
+/// [`write_frame_with_layers`], staged (see [`Staged`]).
+pub fn stage_frame_with_layers(path: &Path, frame: &Frame, layers: &[(&str, &Frame)]) -> Result<Staged> {
     match OutputFormat::from_path(path)? {
         OutputFormat::Png => {
             if !layers.is_empty() {
                 bail!("{}: PNG cannot hold extra layers; write an .exr", path.display());
             }
-            write_png_rgba8(path, frame.width, frame.height, &to_srgb8(frame))
+            stage_png_rgba8(path, frame.width, frame.height, &to_srgb8(frame))
         }
-        OutputFormat::Exr => write_atomic(path, |file| write_exr(file, frame, layers)),
+        OutputFormat::Exr => stage(path, |file| write_exr(file, frame, layers)),
     }
 }
 
 /// Writes 8-bit RGBA bytes that are already display-encoded (the resolve pass's sRGB output) as a PNG,
 /// atomically.
 pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()> {
+    stage_png_rgba8(path, width, height, rgba)?.commit()
+}
+
+/// [`write_png_rgba8`], staged (see [`Staged`]).
+pub fn stage_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<Staged> {
     if OutputFormat::from_path(path)? != OutputFormat::Png {
         bail!("{}: 8-bit display images are written as .png", path.display());
     }
     if rgba.len() != width as usize * height as usize * 4 {
         bail!("{}: {} bytes is not a {width}x{height} RGBA image", path.display(), rgba.len());
     }
-    write_atomic(path, |file| {
+    stage(path, |file| {
         let encoder = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
         image::ImageEncoder::write_image(encoder, rgba, width, height, image::ExtendedColorType::Rgba8)
             .context("encoding PNG")
@@ -161,7 +176,8 @@ fn write_exr(file: &mut std::fs::File, frame: &Frame, layers: &[(&str, &Frame)])
     let channels = AnyChannels::sort(SmallVec::from_vec(channels));
     let layer = Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, channels);
     let image = Image::from_layer(layer);
-    image.write().to_buffered(std::io::BufWriter::new(file)).map_err(|e| anyhow!(e)).context("encoding EXR")
+    // The exr error already says its cause (an I/O error's text): "{e}" keeps it from being said twice.
+    image.write().to_buffered(std::io::BufWriter::new(file)).map_err(|e| anyhow!("{e}")).context("encoding EXR")
 }
 
 /// The directory `path` will be written into; an error if it does not exist (checked before long work).
@@ -178,18 +194,58 @@ pub fn check_output_directory(path: &Path) -> Result<PathBuf> {
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// Writes a file atomically: `write` fills a temporary file next to `path`; only when it succeeds and the data
-/// is flushed to disk is the file renamed onto `path`. On any error the temporary file is removed and `path` is
-/// untouched.
-pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
+/// A fresh hidden name in `dir` for a file being written: short and independent of the final name, so that a
+/// destination whose name is as long as the file system allows still gets one.
+pub fn temporary_name(dir: &Path) -> PathBuf {
+    dir.join(format!(".strata-{}-{}.tmp", std::process::id(), TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)))
+}
+
+/// A file written in full beside its destination, not yet in its place: [`Staged::commit`] renames it there;
+/// dropped uncommitted, it is removed. Several staged files committed together make the outputs of one frame
+/// appear all or none (a failed `--exr` leaves no PNG behind).
+pub struct Staged {
+    temp: PathBuf,
+    path: PathBuf,
+    committed: bool,
+}
+
+impl Staged {
+    /// Renames the file into place. Refuses to replace anything but a regular file (a directory, a device, a
+    /// symbolic link that appeared since the run was planned).
+    pub fn commit(mut self) -> Result<()> {
+        if let Ok(meta) = std::fs::symlink_metadata(&self.path) {
+            if !meta.is_file() {
+                bail!("{}: no longer a regular file (something else is there now); not replaced", self.path.display());
+            }
+        }
+        std::fs::rename(&self.temp, &self.path)
+            .with_context(|| format!("cannot move {} to {}", self.temp.display(), self.path.display()))
+            .with_context(|| format!("writing {}", self.path.display()))?;
+        self.committed = true;
+        Ok(())
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_file(&self.temp);
+        }
+    }
+}
+
+/// Writes `path`'s contents to a temporary file beside it, flushed to disk; nothing is at `path` yet.
+pub fn stage(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<Staged> {
     let dir = check_output_directory(path)?;
-    let file_name = path.file_name().ok_or_else(|| anyhow!("{}: not a file path", path.display()))?;
-    let temp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        file_name.to_string_lossy(),
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
+    if path.file_name().is_none() {
+        bail!("{}: not a file path", path.display());
+    }
+    let temp = temporary_name(&dir);
+    let staged = Staged { temp: temp.clone(), path: path.to_path_buf(), committed: false };
     let result = (|| {
         let mut file = std::fs::OpenOptions::new()
             .write(true)
@@ -198,12 +254,25 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Resul
             .with_context(|| format!("cannot create {}", temp.display()))?;
         write(&mut file)?;
         file.flush()?;
-        file.sync_all().with_context(|| format!("cannot flush {}", temp.display()))?;
-        drop(file);
-        std::fs::rename(&temp, path).with_context(|| format!("cannot move {} to {}", temp.display(), path.display()))
+        file.sync_all().with_context(|| format!("cannot flush {}", temp.display()))
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temp);
+    match result {
+        Ok(()) => Ok(staged),
+        Err(e) => Err(e.context(format!("writing {}", path.display()))),
     }
-    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// Commits staged files in order; all were written in full before the first is renamed.
+pub fn commit_all(staged: Vec<Staged>) -> Result<()> {
+    for file in staged {
+        file.commit()?;
+    }
+    Ok(())
+}
+
+/// Writes a file atomically: `write` fills a temporary file next to `path`; only when it succeeds and the data
+/// is flushed to disk is the file renamed onto `path`. On any error the temporary file is removed and `path` is
+/// untouched.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&mut std::fs::File) -> Result<()>) -> Result<()> {
+    stage(path, write)?.commit()
 }

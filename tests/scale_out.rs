@@ -1,42 +1,10 @@
 //! Scale-out as a user runs it, every render under the validation layer: parts of one frame rendered by separate
 //! processes (`--samples`, `--shard`) and merged by `strata merge` into the bytes one render writes; merges that
 //! cannot be made; checkpoints that survive kill -9 and SIGTERM; shards read from a scheduler's variables.
+mod common;
+use common::cli::{command, outcome, strata, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
-
-/// Cleared from every run, so a test machine inside a Slurm or Kubernetes job does not steer `--shard auto`.
-const SCHEDULER_VARIABLES: [&str; 6] = [
-    "SLURM_ARRAY_TASK_ID",
-    "SLURM_ARRAY_TASK_MIN",
-    "SLURM_ARRAY_TASK_STEP",
-    "SLURM_ARRAY_TASK_COUNT",
-    "JOB_COMPLETION_INDEX",
-    "AWS_BATCH_JOB_ARRAY_INDEX",
-];
-
-fn command(args: &[&str]) -> Command {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_strata"));
-    command.args(args);
-    for name in SCHEDULER_VARIABLES {
-        command.env_remove(name);
-    }
-    command
-}
-
-fn strata(args: &[&str]) -> Output {
-    command(args).output().expect("run strata")
-}
-
-fn outcome(o: &Output) -> String {
-    format!("{}; stderr:\n{}", o.status, String::from_utf8_lossy(&o.stderr))
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-scale-out-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn scene() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml").to_string_lossy().into_owned()
@@ -320,7 +288,7 @@ fn shards_of_a_turntable_render_their_share_of_the_frames() {
 #[test]
 fn the_scale_out_benchmark_runs_clean_and_prints_its_figures() {
     let out =
-        command(&["bench", "--only", "scale-out", "--size", "32x24", "--spp", "2", "--samples", "1", "--validate"])
+        command(&["bench", "--only", "scale-out", "--size", "32x24", "--spp", "16", "--samples", "1", "--validate"])
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .output()
             .unwrap();

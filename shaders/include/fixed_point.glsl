@@ -7,8 +7,8 @@
 #include "shared_constants.glsl"
 
 const float SUM_SCALE = float(1u << SUM_FRACTION_BITS);
-// The most one sample adds per channel: 2^23, so that 65536 samples (MAX_SPP) of it stay below 2^64 counts.
-const float SUM_MAX_SAMPLE = 8388608.0;
+// The most one sample adds per channel (shared_constants.glsl says why).
+const float SUM_MAX_SAMPLE = float(1u << SUM_MAX_SAMPLE_LOG2);
 
 // A sample's value in counts, rounded to the nearest (negative values, which radiance never is, count as 0).
 u64vec4 to_fixed_point(vec4 v) {

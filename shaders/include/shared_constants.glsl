@@ -33,6 +33,9 @@ const uint BACKGROUND_ENVIRONMENT = 1u;
 const uint BACKGROUND_TRANSPARENT = 2u;
 // The fixed point of the samples' sums (fixed_point.glsl; src/partial/): counts of 2^-24.
 const uint SUM_FRACTION_BITS = 24u;
+// The most one sample adds per channel is 2^SUM_MAX_SAMPLE_LOG2, so that MAX_SPP (65536) samples stay below 2^64
+// counts; a part whose sums exceed samples × 2^(this + SUM_FRACTION_BITS) was not written by a render.
+const uint SUM_MAX_SAMPLE_LOG2 = 23u;
 // The accumulation pass's sabotage bits (pc.sabotage; render::frame::Sabotage): strata check's canaries.
 const uint SABOTAGE_NO_SHADOW_RAYS = 1u;
 const uint SABOTAGE_FLIPPED_NORMALS = 2u;

@@ -57,7 +57,7 @@ impl DeviceFilter {
 #[derive(Debug, Clone)]
 pub struct Expect {
     pub case: String,
-    pattern: Regex,
+    pattern: CasePattern,
     pub status: Status,
     pub reason: String,
     pub devices: DeviceFilter,
@@ -113,15 +113,67 @@ struct AllowToml {
     devices: DeviceFilter,
 }
 
+/// The 1-based lines of byte offsets in a text: the line starts found once, then a binary search per offset
+/// (counting from the start for each of 100,000 entries was quadratic).
+struct Lines(Vec<usize>);
+
+impl Lines {
+    fn of(text: &str) -> Self {
+        Self(text.bytes().enumerate().filter(|(_, b)| *b == b'\n').map(|(i, _)| i).collect())
+    }
+
+    fn line(&self, offset: usize) -> usize {
+        self.0.partition_point(|&newline| newline < offset) + 1
+    }
+}
+
 /// The 1-based line of byte `offset` in `text`.
 fn line_of(text: &str, offset: usize) -> usize {
-    text[..offset.min(text.len())].bytes().filter(|b| *b == b'\n').count() + 1
+    Lines::of(text).line(offset)
+}
+
+/// How an entry names its cases: a plain name matches itself (compared as text: a baseline of 100,000 names
+/// compiles no regular expression), anything else is a whole-name regular expression.
+#[derive(Debug, Clone)]
+enum CasePattern {
+    Exact(String),
+    Regex(Regex),
+}
+
+impl CasePattern {
+    fn is_match(&self, case: &str) -> bool {
+        match self {
+            CasePattern::Exact(name) => name == case,
+            CasePattern::Regex(r) => r.is_match(case),
+        }
+    }
+}
+
+/// The most of a pattern or value a message quotes.
+const QUOTED: usize = 80;
+
+/// A regular expression's error in one line, without the pattern it repeats (which may be megabytes).
+pub fn regex_error(e: &regex::Error) -> String {
+    match e {
+        regex::Error::Syntax(text) => {
+            text.lines().rev().find(|l| l.starts_with("error:")).unwrap_or("a syntax error").to_string()
+        }
+        other => crate::input::excerpt(&other.to_string(), QUOTED),
+    }
 }
 
 /// A case pattern: a whole-name regular expression (a plain name matches itself).
-fn case_pattern(case: &str) -> Result<Regex> {
-    Regex::new(&format!("^(?:{case})$")).map_err(|e| anyhow!("case {case:?} is not a valid regular expression: {e}"))
+fn case_pattern(case: &str) -> Result<CasePattern> {
+    if regex::escape(case) == case {
+        return Ok(CasePattern::Exact(case.to_string()));
+    }
+    Regex::new(&format!("^(?:{case})$")).map(CasePattern::Regex).map_err(|e| {
+        anyhow!("case {:?} is not a valid regular expression: {}", crate::input::excerpt(case, QUOTED), regex_error(&e))
+    })
 }
+
+/// The largest expectations file read (a baseline of every case many times over).
+pub const MAX_EXPECTATIONS_BYTES: u64 = 16 << 20;
 
 fn expectable(word: &str) -> Result<Status> {
     match Status::parse(word) {
@@ -133,7 +185,8 @@ fn expectable(word: &str) -> Result<Status> {
 impl Expectations {
     /// Reads a TOML expectations file, or a `.csv` baseline (`case,status,reason`).
     pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("{}: cannot read", path.display()))?;
+        // A regular file of bounded size: /dev/zero would be read for ever, a FIFO would block.
+        let text = crate::input::read_text_bounded(path, MAX_EXPECTATIONS_BYTES, "an expectations file")?;
         let is_csv = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
         let mut parsed = if is_csv { Self::parse_csv(&text, path)? } else { Self::parse_toml(&text, path)? };
         parsed.path = Some(path.to_path_buf());
@@ -147,8 +200,9 @@ impl Expectations {
             anyhow!("{file}:{line}: {}", e.message())
         })?;
         let mut out = Self::default();
+        let lines = Lines::of(text);
         for entry in raw.expect {
-            let at = format!("{file}:{}", line_of(text, entry.span().start));
+            let at = format!("{file}:{}", lines.line(entry.span().start));
             let e = entry.into_inner();
             let status = expectable(&e.status).with_context(|| at.clone())?;
             if e.reason.trim().is_empty() {
@@ -158,7 +212,7 @@ impl Expectations {
             out.expects.push(Expect { case: e.case, pattern, status, reason: e.reason, devices: e.devices, at });
         }
         for entry in raw.allow {
-            let at = format!("{file}:{}", line_of(text, entry.span().start));
+            let at = format!("{file}:{}", lines.line(entry.span().start));
             let a = entry.into_inner();
             if a.reason.trim().is_empty() {
                 bail!("{at}: allowing {} needs a reason", a.id);
@@ -185,7 +239,7 @@ impl Expectations {
             if reason.trim().is_empty() {
                 bail!("{at}: the expectation for {case} needs a reason");
             }
-            let pattern = case_pattern(&regex::escape(case)).with_context(|| at.clone())?;
+            let pattern = CasePattern::Exact(case.clone());
             out.expects.push(Expect {
                 case: case.clone(),
                 pattern,

@@ -9,6 +9,9 @@ use anyhow::{Context as _, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+/// The reports written in `--out`, in the order [`write_all`] writes them.
+pub const REPORT_FILES: [&str; 5] = ["results.csv", "failures.csv", "results.json", "summary.md", "report.html"];
+
 /// Writes every report; returns the paths written.
 pub fn write_all(summary: &RunSummary, out: &Path, junit: Option<&Path>) -> Result<Vec<PathBuf>> {
     let mut written = Vec::new();
@@ -20,12 +23,13 @@ pub fn write_all(summary: &RunSummary, out: &Path, junit: Option<&Path>) -> Resu
         written.push(name.to_path_buf());
         Ok(())
     };
-    write(&out.join("results.csv"), &results_csv(summary))?;
-    write(&out.join("failures.csv"), &failures_csv(summary))?;
-    write(&out.join("results.json"), &serde_json::to_string_pretty(summary).context("results.json")?)?;
+    let [results, failures, json, summary_md, html] = REPORT_FILES;
+    write(&out.join(results), &results_csv(summary))?;
+    write(&out.join(failures), &failures_csv(summary))?;
+    write(&out.join(json), &serde_json::to_string_pretty(summary).context("results.json")?)?;
     let markdown = markdown(summary);
-    write(&out.join("summary.md"), &markdown)?;
-    write(&out.join("report.html"), &super::html::page(summary, out))?;
+    write(&out.join(summary_md), &markdown)?;
+    write(&out.join(html), &super::html::page(summary, out))?;
     if let Some(path) = junit {
         write(path, &super::junit::xml(summary))?;
     }

@@ -2,7 +2,10 @@
 use clap::Args;
 use std::path::PathBuf;
 use strata::scene::settings::MAX_IMAGE_SIDE as MAX_SIDE;
-use strata::scene::settings::{MAX_BOUNCES, MAX_SPP};
+use strata::scene::settings::{MAX_BOUNCES, MAX_EXPOSURE_STOPS, MAX_SPP};
+
+/// The most frames one run of --frames renders.
+pub const MAX_FRAMES: u64 = 100_000;
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -121,11 +124,11 @@ pub struct RenderArgs {
     /// Also write the linear radiance to this OpenEXR file (with the --aov layers, if any).
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
-    /// Image size in pixels [default: the scene file's, else 960x540].
+    /// Image size in pixels, each side 1 to 16384 [default: the scene file's, else 960x540].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
-    /// Samples per pixel: each is a G-buffer pass at its own lens point, shutter time and sub-pixel jitter plus
-    /// an accumulation pass [default: the scene file's, else 16].
+    /// Samples per pixel, 1 to 65536: each is a G-buffer pass at its own lens point, shutter time and sub-pixel
+    /// jitter plus an accumulation pass [default: the scene file's, else 16].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: Option<u32>,
     /// How sample points are placed: regular (strata centres; aliases), random, jittered (one random point in
@@ -137,17 +140,18 @@ pub struct RenderArgs {
     /// [default: the scene file's, else 0].
     #[arg(long, value_name = "S")]
     pub seed: Option<u64>,
-    /// Thin-lens aperture radius in metres; 0 is a pinhole (everything sharp) [default: the scene's camera].
-    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
+    /// Thin-lens aperture radius in metres, 0 to 1000; 0 is a pinhole (everything sharp) [default: the scene's
+    /// camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_aperture, allow_hyphen_values = true)]
     pub aperture: Option<f32>,
-    /// Distance in metres of the plane in focus [default: the scene's camera].
-    #[arg(long, value_name = "METRES", value_parser = parse_non_negative, allow_hyphen_values = true)]
+    /// Distance in metres of the plane in focus, 0 to 1e9 [default: the scene's camera].
+    #[arg(long, value_name = "METRES", value_parser = parse_focus, allow_hyphen_values = true)]
     pub focus: Option<f32>,
-    /// Shutter interval in seconds; motion during it blurs. OPEN:CLOSE with equal times is a still frame
-    /// [default: the scene file's, else 0:0].
+    /// Shutter interval in seconds; motion during it blurs. OPEN:CLOSE with equal times is a still frame; each
+    /// time within ±1e9 s [default: the scene file's, else 0:0].
     #[arg(long, value_name = "OPEN:CLOSE", value_parser = parse_shutter)]
     pub shutter: Option<(f32, f32)>,
-    /// Exposure in stops: the PNG's radiance is scaled by 2^EV before tone mapping; or `auto`, which maps the
+    /// Exposure in stops, -64 to 64: the PNG's radiance is scaled by 2^EV before tone mapping; or `auto`, which maps the
     /// picture's log-average luminance to middle grey (0.18, as photographic tone reproduction does) and prints
     /// the value it chose (also in --json). The default, 0, shows radiance as it is: right for scenes made in
     /// relative units (strata's own), too bright for glTF lights in physical units (a 6830-lux sun) [default:
@@ -156,8 +160,9 @@ pub struct RenderArgs {
     pub exposure: Option<ExposureArg>,
     /// Photographic exposure value at ISO 100 (sunny day 15, overcast 12, indoors 7): radiance × 1 / (1.2 × 2^EV100),
     /// the saturation-based exposure physically based renderers use (Lagarde and de Rousiers, "Moving Frostbite
-    /// to PBR", 2014). For glTF scenes whose lights are in physical units.
-    #[arg(long, value_name = "EV100", allow_hyphen_values = true, value_parser = parse_finite)]
+    /// to PBR", 2014). For glTF scenes whose lights are in physical units. From -60 to 60 (the same span of stops
+    /// as --exposure).
+    #[arg(long, value_name = "EV100", allow_hyphen_values = true, value_parser = parse_ev100)]
     pub ev100: Option<f32>,
     /// Tone map for the PNG: clamp (none), or filmic (an ACES fit) [default: the scene file's, else filmic].
     #[arg(long, value_name = "NAME", value_parser = parse_tone_map)]
@@ -183,8 +188,8 @@ pub struct RenderArgs {
     /// of --indirect and --no-indirect wins).
     #[arg(long, overrides_with = "indirect")]
     pub no_indirect: bool,
-    /// Most bounces after the visible surface: gloss and translucency rays, and diffuse ones with --indirect. 0 is
-    /// direct light alone; 3 sees through a glass sphere [default: the scene file's, else 3].
+    /// Most bounces after the visible surface, 0 to 16: gloss and translucency rays, and diffuse ones with
+    /// --indirect. 0 is direct light alone; 3 sees through a glass sphere [default: the scene file's, else 3].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(0..=MAX_BOUNCES as i64))]
     pub bounces: Option<u32>,
     /// What pixels no surface covers show: a linear RGB colour R,G,B (also what escaping rays see without an
@@ -202,8 +207,8 @@ pub struct RenderArgs {
     /// Turn the environment about +Y by this many degrees (counter-clockwise seen from above).
     #[arg(long, value_name = "DEGREES", allow_hyphen_values = true, value_parser = parse_finite)]
     pub environment_rotation: Option<f32>,
-    /// Scale the environment's radiance.
-    #[arg(long, value_name = "X", value_parser = parse_non_negative)]
+    /// Scale the environment's radiance, 0 to 1e9.
+    #[arg(long, value_name = "X", value_parser = parse_intensity)]
     pub environment_intensity: Option<f32>,
     /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
     /// emission, material. With an .exr they are layers of the EXR (raw values); with -o x.png each is a PNG
@@ -223,21 +228,21 @@ pub struct RenderArgs {
     /// strata places].
     #[arg(long, value_name = "DEGREES", value_parser = parse_yfov)]
     pub yfov: Option<f32>,
-    /// Render N views around +Y (a turntable): the orbit's azimuth steps by 360/N degrees from --orbit's (or 0),
+    /// Render N views around +Y (a turntable, N from 1 to 100000): the orbit's azimuth steps by 360/N degrees from --orbit's (or 0),
     /// written as -o's name with the view's number, 1 to N (thumb.png: thumb.0001.png ...; a run of # in -o
     /// sets the digits: thumb.##.png). One device, one upload, one set of pipelines for all of them.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub turntable: Option<u32>,
-    /// Render the frames A to B (inclusive) of the scene's animation, frame k at time k / --fps, each with its
-    /// own shutter (--shutter-angle), written as -o's name with the frame's number.
+    /// Render the frames A to B (inclusive, at most 100000 of them) of the scene's animation, frame k at time
+    /// k / --fps, each with its own shutter (--shutter-angle), written as -o's name with the frame's number.
     #[arg(long, value_name = "A..B", value_parser = parse_frames)]
     pub frames: Option<(u32, u32)>,
-    /// Frames per second of --frames and --time.
-    #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = parse_positive)]
+    /// Frames per second of --frames and --time, 0.001 to 1000.
+    #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = parse_fps)]
     pub fps: f32,
     /// Render one frame at time T seconds of the animation (its shutter as --shutter-angle says): the same picture
     /// as the frame of --frames at that time.
-    #[arg(long, value_name = "T", value_parser = parse_finite, allow_hyphen_values = true)]
+    #[arg(long, value_name = "T", value_parser = parse_time, allow_hyphen_values = true)]
     pub time: Option<f32>,
     /// The shutter of --frames and --time as a fraction of a frame, in degrees: 180 opens it for half a frame
     /// (film's usual motion blur), 0 is a still frame.
@@ -259,8 +264,8 @@ pub struct RenderArgs {
     /// output is written.
     #[arg(long, value_name = "FILE", help_heading = "Scale-out")]
     pub checkpoint: Option<PathBuf>,
-    /// Seconds between checkpoints.
-    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = parse_positive, help_heading = "Scale-out")]
+    /// Seconds between checkpoints, from 0.01 to 86400 (a day).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0, value_parser = parse_checkpoint_interval, help_heading = "Scale-out")]
     pub checkpoint_every: f32,
     /// Go on from this checkpoint (or part) of the same render instead of starting from zero.
     #[arg(long, value_name = "FILE", help_heading = "Scale-out")]
@@ -304,23 +309,9 @@ pub fn parse_tone_map(text: &str) -> Result<strata::scene::settings::ToneMap, St
     strata::scene::settings::ToneMap::parse(text).map_err(|e| e.to_string())
 }
 
-pub fn parse_non_negative(text: &str) -> Result<f32, String> {
-    let v: f32 = text.trim().parse().map_err(|_| format!("\"{text}\" is not a number"))?;
-    if !v.is_finite() || v < 0.0 {
-        return Err(format!("{v} must be a finite number, 0 or more"));
-    }
-    Ok(v)
-}
-
 pub fn parse_shutter(text: &str) -> Result<(f32, f32), String> {
     let (open, close) = text.split_once(':').ok_or_else(|| format!("\"{text}\" is not OPEN:CLOSE, e.g. 0:0.25"))?;
-    let time = |s: &str| -> Result<f32, String> {
-        let v: f32 = s.trim().parse().map_err(|_| format!("\"{s}\" is not a time in seconds"))?;
-        if !v.is_finite() {
-            return Err(format!("{v} is not a finite time"));
-        }
-        Ok(v)
-    };
+    let time = |s: &str| -> Result<f32, String> { parse_time(s) };
     let (open, close) = (time(open)?, time(close)?);
     if close < open {
         return Err(format!("the shutter closes ({close}) before it opens ({open})"));
@@ -450,11 +441,35 @@ pub fn parse_yfov(text: &str) -> Result<f32, String> {
     }
 }
 
-pub fn parse_positive(text: &str) -> Result<f32, String> {
+/// A number within `lo..=hi`; the error names the span and what the number is.
+fn parse_within(text: &str, lo: f32, hi: f32, what: &str) -> Result<f32, String> {
     match text.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        _ => Err(format!("\"{text}\" is not a number above 0")),
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("\"{text}\" is not {what} from {lo} to {hi}")),
     }
+}
+
+/// Times of the animation and the shutter: ±1e9 s (31 years) keeps every time sum finite and exact enough.
+pub const MAX_TIME_SECONDS: f32 = 1e9;
+
+pub fn parse_time(text: &str) -> Result<f32, String> {
+    parse_within(text, -MAX_TIME_SECONDS, MAX_TIME_SECONDS, "a time in seconds")
+}
+
+pub fn parse_fps(text: &str) -> Result<f32, String> {
+    parse_within(text, 0.001, 1000.0, "a frame rate")
+}
+
+pub fn parse_aperture(text: &str) -> Result<f32, String> {
+    parse_within(text, 0.0, 1000.0, "an aperture radius in metres")
+}
+
+pub fn parse_focus(text: &str) -> Result<f32, String> {
+    parse_within(text, 0.0, 1e9, "a focus distance in metres")
+}
+
+pub fn parse_intensity(text: &str) -> Result<f32, String> {
+    parse_within(text, 0.0, 1e9, "an intensity")
 }
 
 pub fn parse_shutter_angle(text: &str) -> Result<f32, String> {
@@ -477,8 +492,10 @@ pub fn parse_frames(text: &str) -> Result<(u32, u32), String> {
     if b < a {
         return Err(format!("the last frame {b} comes before the first {a}"));
     }
-    if b - a >= 100_000 {
-        return Err(format!("{} frames is more than one run renders (100000)", b - a + 1));
+    // In 64 bits: 0..4294967295 is 2^32 frames, which 32 bits would count as 0.
+    let count = u64::from(b) - u64::from(a) + 1;
+    if count > MAX_FRAMES {
+        return Err(format!("{count} frames is more than one run renders ({MAX_FRAMES})"));
     }
     Ok((a, b))
 }
@@ -495,8 +512,30 @@ pub fn parse_exposure(text: &str) -> Result<ExposureArg, String> {
         return Ok(ExposureArg::Auto);
     }
     match text.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v.abs() <= 64.0 => Ok(ExposureArg::Stops(v)),
-        _ => Err(format!("\"{text}\" is not a number of stops between -64 and 64, or auto")),
+        Ok(v) if v.is_finite() && v.abs() <= MAX_EXPOSURE_STOPS => Ok(ExposureArg::Stops(v)),
+        _ => Err(format!(
+            "\"{text}\" is not a number of stops between -{MAX_EXPOSURE_STOPS} and {MAX_EXPOSURE_STOPS}, or auto"
+        )),
+    }
+}
+
+/// The most `--ev100` says either way: its stops ([`ev100_stops`]) stay within --exposure's.
+pub const MAX_EV100: f32 = 60.0;
+
+pub fn parse_ev100(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= MAX_EV100 => Ok(v),
+        _ => Err(format!("\"{text}\" is not an EV100 between -{MAX_EV100} and {MAX_EV100} (sunny day 15, indoors 7)")),
+    }
+}
+
+/// The longest interval between checkpoints: a day. (Far longer would overflow a Duration; 1e30 did.)
+pub const MAX_CHECKPOINT_SECONDS: f32 = 86400.0;
+
+pub fn parse_checkpoint_interval(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if (0.01..=MAX_CHECKPOINT_SECONDS).contains(&v) => Ok(v),
+        _ => Err(format!("\"{text}\" is not a number of seconds from 0.01 to {MAX_CHECKPOINT_SECONDS} (a day)")),
     }
 }
 

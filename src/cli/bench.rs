@@ -119,8 +119,16 @@ fn bench_scale_out(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             100.0 * (read + write) / 1e3 / frame_s,
             100.0 * (read + write) / 1e3 / 60.0
         );
-        // Merges of N parts (the same sums under N disjoint sample ranges: merging does not look at values).
+        // Merges of N parts (the same sums under N disjoint sample ranges: merging does not look at values). A part
+        // holds at least one sample (an empty one is refused), so at most --spp parts.
         for n in [2u32, 4, 8, 16] {
+            if n > args.spp {
+                println!(
+                    "  merge of {n:>2} parts: skipped (--spp {} splits into at most {} parts)",
+                    args.spp, args.spp
+                );
+                continue;
+            }
             let paths: Vec<std::path::PathBuf> = (0..n)
                 .map(|k| {
                     let path = dir.join(format!("part-{k}.exr"));

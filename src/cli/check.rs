@@ -18,7 +18,13 @@ pub fn check(args: CheckArgs) -> Result<bool> {
         return Ok(true);
     }
     let cases = match &args.cases {
-        Some(text) => Some(regex::Regex::new(text).map_err(|e| anyhow!("--cases {text:?}: {e}"))?),
+        Some(text) => Some(regex::Regex::new(text).map_err(|e| {
+            anyhow!(
+                "--cases {:?} is not a valid regular expression: {}",
+                strata::input::excerpt(text, 80),
+                strata::check::expectations::regex_error(&e)
+            )
+        })?),
         None => None,
     };
     let expectations = match &args.expectations {
@@ -49,10 +55,20 @@ pub fn check(args: CheckArgs) -> Result<bool> {
         super::print_stdout(&text);
         return Ok(true);
     }
+    // Every report's place checked before the first case runs: an unwritable --junit found after a 30 s suite
+    // loses the run.
     std::fs::create_dir_all(&args.out).with_context(|| format!("creating {}", args.out.display()))?;
-    if let Some(junit) = &args.junit {
-        strata::output::check_output_directory(junit)?;
+    let mut plan = strata::write_plan::WritePlan::new();
+    for name in report::REPORT_FILES {
+        plan.writes("a report", &args.out.join(name))?;
     }
+    if let Some(junit) = &args.junit {
+        plan.writes("--junit", junit)?;
+    }
+    if let Some(expectations) = &args.expectations {
+        plan.reads("--expectations", expectations);
+    }
+    plan.check(&|_, _| false)?;
     eprintln!(
         "strata check: {} case(s), each in its own process under the validation layer; reports in {}",
         runner::select_cases(&options).len(),

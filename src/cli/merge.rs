@@ -11,7 +11,6 @@ use strata::vk::{Gpu, GpuOptions};
 pub fn merge(args: MergeArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let format = OutputFormat::from_path(&args.output)?;
-    strata::output::check_output_directory(&args.output)?;
     if args.partial && format != OutputFormat::Exr {
         bail!("{}: --partial writes a part, an .exr", args.output.display());
     }
@@ -19,11 +18,22 @@ pub fn merge(args: MergeArgs) -> Result<()> {
         if args.partial || OutputFormat::from_path(exr)? != OutputFormat::Exr {
             bail!("--exr {}: the linear frame goes to an .exr, and a --partial merge has none", exr.display());
         }
-        strata::output::check_output_directory(exr)?;
     }
-    if let Some(p) = args.parts.iter().find(|p| **p == args.output || Some(*p) == args.exr.as_ref()) {
-        bail!("{}: the output would overwrite one of the parts", p.display());
+    // Parts, output and --exr compared as files (./a.exr, an absolute path, a link): nothing read is
+    // overwritten, nothing written is removed.
+    let mut plan = strata::write_plan::WritePlan::new();
+    for part in &args.parts {
+        if args.remove_parts {
+            plan.reads_then_removes("the part", part);
+        } else {
+            plan.reads("the part", part);
+        }
     }
+    plan.writes("-o", &args.output)?;
+    if let Some(exr) = &args.exr {
+        plan.writes("--exr", exr)?;
+    }
+    plan.check(&|_, _| false)?;
     let merged = merge_parts(&args.parts, !args.partial)?;
     let sums = &merged.sums;
     if args.partial {
@@ -56,15 +66,17 @@ pub fn merge(args: MergeArgs) -> Result<()> {
         if args.gpu.validate {
             log.check().map_err(|report| anyhow!("{report}"))?;
         }
-        match format {
+        // Both files written in full before either is put in place: a failed --exr leaves no PNG behind.
+        let mut staged = vec![match format {
             OutputFormat::Png => {
-                strata::output::write_png_rgba8(&args.output, sums.width, sums.height, &resolved.display)?
+                strata::output::stage_png_rgba8(&args.output, sums.width, sums.height, &resolved.display)?
             }
-            OutputFormat::Exr => strata::output::write_frame(&args.output, &resolved.linear)?,
-        }
+            OutputFormat::Exr => strata::output::stage_frame_with_layers(&args.output, &resolved.linear, &[])?,
+        }];
         if let Some(exr) = &args.exr {
-            strata::output::write_frame(exr, &resolved.linear)?;
+            staged.push(strata::output::stage_frame_with_layers(exr, &resolved.linear, &[])?);
         }
+        strata::output::commit_all(staged)?;
     }
     if args.remove_parts {
         for part in &args.parts {

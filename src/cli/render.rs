@@ -53,6 +53,7 @@ pub fn render(args: RenderArgs) -> Result<()> {
                 args.scenes.len()
             );
         }
+        check_batch(args_output(&args), &args)?;
     }
     // One device and one set of pipelines for every scene; made by the first scene that gets that far.
     let mut gpu: Option<Gpu> = None;
@@ -85,10 +86,92 @@ pub fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// `{name}` in an output path: the scene file's name without its extension.
-fn for_scene(path: &std::path::Path, scene: &std::path::Path) -> std::path::PathBuf {
-    let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-    std::path::PathBuf::from(path.to_string_lossy().replace("{name}", &name))
+/// `{name}` in an output path: the scene file's name without its extension. A name that would climb out of or
+/// stay in the output's directory (`..` from `...gltf`, `.`, nothing) is refused, naming the scene.
+fn for_scene(path: &std::path::Path, scene: &std::path::Path) -> Result<std::path::PathBuf> {
+    let text = path.to_string_lossy();
+    if !text.contains("{name}") {
+        return Ok(path.to_path_buf());
+    }
+    let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    if name.is_empty() || name == "." || name == ".." {
+        bail!("{}: its name {name:?} cannot stand for {{name}} in {text} (rename the file)", scene.display());
+    }
+    Ok(std::path::PathBuf::from(text.replace("{name}", &name)))
+}
+
+/// `-o` as given (a batch needs it).
+fn args_output(args: &RenderArgs) -> &std::path::Path {
+    args.output.as_deref().expect("a batch has -o (checked)")
+}
+
+/// The AOVs asked for.
+fn aov_list(args: &RenderArgs) -> &[strata::render::aov::Aov] {
+    args.aov.as_ref().map(|list| &list.0[..]).unwrap_or(&[])
+}
+
+/// Where an AOV of a PNG output goes: beside it, `x.<aov>.png`.
+fn aov_png_path(output: &std::path::Path, aov: strata::render::aov::Aov) -> std::path::PathBuf {
+    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    output.with_file_name(format!("{stem}.{}.png", aov.name()))
+}
+
+/// The files one frame writes: the output, its AOV PNGs (beside a PNG output; an EXR holds them as layers), and
+/// --exr.
+fn frame_files(
+    output: &std::path::Path,
+    exr: Option<&std::path::Path>,
+    aovs: &[strata::render::aov::Aov],
+) -> Result<Vec<(&'static str, std::path::PathBuf)>> {
+    let mut files = vec![("-o", output.to_path_buf())];
+    if strata::output::OutputFormat::from_path(output)? == strata::output::OutputFormat::Png {
+        files.extend(aovs.iter().map(|&aov| ("an --aov file", aov_png_path(output, aov))));
+    }
+    files.extend(exr.map(|e| ("--exr", e.to_path_buf())));
+    Ok(files)
+}
+
+/// Before a batch renders: every scene's files are its own (two `Box.gltf` from two folders would write one
+/// `out/Box.png`), and each name can stand for `{name}`.
+fn check_batch(output: &std::path::Path, args: &RenderArgs) -> Result<()> {
+    let mut plan = strata::write_plan::WritePlan::new();
+    for scene in &args.scenes {
+        let exr = args.exr.as_ref().map(|e| for_scene(e, scene)).transpose()?;
+        for (role, path) in frame_files(&for_scene(output, scene)?, exr.as_deref(), aov_list(args))? {
+            plan.writes(&format!("{role} of {}", scene.display()), &path)?;
+        }
+    }
+    plan.check(&|_, _| false)
+}
+
+/// Everything one scene's run writes, reads and removes, checked as files before the device is made.
+fn check_scene_plan(
+    args: &RenderArgs,
+    frames: &[sequence::FramePlan],
+    output: &std::path::Path,
+    exr: Option<&std::path::Path>,
+) -> Result<()> {
+    let mut plan = strata::write_plan::WritePlan::new();
+    if let Some(environment) = args.environment.as_ref().filter(|e| e.as_os_str() != "studio") {
+        plan.reads("--environment", environment);
+    }
+    if let Some(resume) = &args.resume {
+        plan.reads("--resume", resume);
+    }
+    for frame in frames {
+        let (output, exr) = match frame.number {
+            Some(n) => (sequence::numbered(output, n), exr.map(|e| sequence::numbered(e, n))),
+            None => (output.to_path_buf(), exr.map(std::path::Path::to_path_buf)),
+        };
+        for (role, path) in frame_files(&output, exr.as_deref(), aov_list(args))? {
+            plan.writes(role, &path)?;
+        }
+    }
+    if let Some(checkpoint) = &args.checkpoint {
+        plan.writes_then_removes("--checkpoint", checkpoint)?;
+    }
+    // Going on from one's own checkpoint is what --checkpoint does.
+    plan.check(&|a, b| matches!((a, b), ("--checkpoint", "--resume") | ("--resume", "--checkpoint")))
 }
 
 /// One scene: load, frame, render its frame or frames, write them. With `several`, outputs are written as each
@@ -140,16 +223,14 @@ fn render_scene(
         .output
         .clone()
         .ok_or_else(|| anyhow!("no output file: pass -o FILE (or set output in the scene file's [render] table)"))?;
-    let output = for_scene(&output, scene_path);
-    let exr_output = args.exr.as_ref().map(|e| for_scene(e, scene_path));
-    // Check the output names before any work, so a typo costs nothing.
+    let output = for_scene(&output, scene_path)?;
+    let exr_output = args.exr.as_ref().map(|e| for_scene(e, scene_path)).transpose()?;
+    // Check the output names before any work, so a typo costs nothing (the write plan below checks the rest).
     strata::output::OutputFormat::from_path(&output)?;
-    strata::output::check_output_directory(&output)?;
     if let Some(exr) = &exr_output {
         if strata::output::OutputFormat::from_path(exr)? != strata::output::OutputFormat::Exr {
             bail!("--exr {}: the file name must end in .exr", exr.display());
         }
-        strata::output::check_output_directory(exr)?;
     }
     let sequence = sequence_of(args)?;
     let mut scene = loaded.scene;
@@ -202,7 +283,12 @@ fn render_scene(
         eprintln!("strata: this shard has no frames (more shards than frames); nothing to do");
         return Ok(());
     }
+    // What the run writes, reads and removes, as files, before anything is read from a checkpoint or rendered.
+    check_scene_plan(args, &plans, &output, exr_output.as_deref())?;
     let part_plan = if one_frame && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
+    if part_plan.as_ref().is_some_and(FramePart::is_empty) {
+        return Ok(());
+    }
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         *gpu_slot = Some(Gpu::new(&GpuOptions {
@@ -272,8 +358,9 @@ fn render_scene(
                     if e.downcast_ref::<strata::render::frame::Interrupted>().is_some()
                         && part_plan.as_ref().and_then(|p| p.checkpoint()).is_some() =>
                 {
-                    let checkpoint = part_plan.as_ref().and_then(|p| p.checkpoint()).expect("matched");
-                    return stopped_with_checkpoint(checkpoint, on_gpu, gpu_slot.take());
+                    let plan = part_plan.as_ref().expect("matched");
+                    let checkpoint = plan.checkpoint().expect("matched");
+                    return stopped_with_checkpoint(checkpoint, plan.last_save_failed(), on_gpu, gpu_slot.take());
                 }
                 Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() && !finished.is_empty() => {
                     return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
@@ -365,6 +452,7 @@ fn interrupted(
 /// render as it stopped); say so and exit, 75 after SIGTERM (run the same command again), 130 after Ctrl-C.
 fn stopped_with_checkpoint(
     checkpoint: &std::path::Path,
+    save_failed: bool,
     on_gpu: strata::render::SceneOnGpu,
     gpu: Option<Gpu>,
 ) -> Result<()> {
@@ -372,7 +460,12 @@ fn stopped_with_checkpoint(
     drop(gpu);
     let terminated = TERMINATED.load(std::sync::atomic::Ordering::SeqCst);
     let why = if terminated { "stopped by SIGTERM" } else { "interrupted" };
-    if checkpoint.is_file() {
+    if save_failed {
+        eprintln!(
+            "strata: {why}; the last checkpoint could not be written (see the warning above){}",
+            if checkpoint.is_file() { ", so the one there holds fewer samples" } else { "" }
+        );
+    } else if checkpoint.is_file() {
         eprintln!(
             "strata: {why}; the samples so far are saved in {} (run the same command again to go on from them)",
             checkpoint.display()
@@ -523,17 +616,25 @@ fn report(
     }
 }
 
-/// The picture at `output` (with its AOVs) and, when asked, the linear radiance and AOV layers at `exr`.
+/// The picture at `output` (with its AOVs) and, when asked, the linear radiance and AOV layers at `exr`: every
+/// file written in full first, then all put in place, so that a failure leaves none of them behind.
 fn write_picture(
     output: &std::path::Path,
     exr: Option<&std::path::Path>,
     picture: &Picture,
     aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
 ) -> Result<()> {
-    write_outputs(output, picture, aovs)?;
+    let mut staged = stage_outputs(output, picture, aovs)?;
     if let Some(exr) = exr {
         let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        strata::output::write_frame_with_layers(exr, picture.linear(), &layers)?;
+        staged.push(strata::output::stage_frame_with_layers(exr, picture.linear(), &layers)?);
+    }
+    for file in staged {
+        let path = file.path().to_path_buf();
+        file.commit()?;
+        if path != output && Some(path.as_path()) != exr {
+            eprintln!("strata: wrote {}", path.display());
+        }
     }
     Ok(())
 }
@@ -553,30 +654,28 @@ impl Picture {
     }
 }
 
-/// The beauty image, then the AOVs: layers of an EXR, or PNGs beside a PNG.
-fn write_outputs(
+/// The beauty image, then the AOVs: layers of an EXR, or PNGs beside a PNG; staged, not yet in place.
+fn stage_outputs(
     output: &std::path::Path,
     picture: &Picture,
     aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
-) -> Result<()> {
-    use strata::output::{write_data_png, write_frame, write_frame_with_layers, write_png_rgba8, OutputFormat};
+) -> Result<Vec<strata::output::Staged>> {
+    use strata::output::{stage_data_png, stage_frame_with_layers, stage_png_rgba8, OutputFormat};
     if OutputFormat::from_path(output)? == OutputFormat::Exr {
         let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        return write_frame_with_layers(output, picture.linear(), &layers);
+        return Ok(vec![stage_frame_with_layers(output, picture.linear(), &layers)?]);
     }
-    match picture {
-        Picture::Rendered(r) => write_png_rgba8(output, r.linear.width, r.linear.height, &r.display)?,
-        Picture::Preview(frame) => write_frame(output, frame)?,
-    }
-    let stem = output.file_stem().and_then(|s| s.to_str()).unwrap_or("frame");
+    let mut staged = vec![match picture {
+        Picture::Rendered(r) => stage_png_rgba8(output, r.linear.width, r.linear.height, &r.display)?,
+        Picture::Preview(frame) => stage_frame_with_layers(output, frame, &[])?,
+    }];
     for (aov, raw) in aovs {
-        let path = output.with_file_name(format!("{stem}.{}.png", aov.name()));
-        if aov.is_color() {
-            write_frame(&path, raw)?;
+        let path = aov_png_path(output, *aov);
+        staged.push(if aov.is_color() {
+            stage_frame_with_layers(&path, raw, &[])?
         } else {
-            write_data_png(&path, &aov.for_display(raw))?;
-        }
-        eprintln!("strata: wrote {}", path.display());
+            stage_data_png(&path, &aov.for_display(raw))?
+        });
     }
-    Ok(())
+    Ok(staged)
 }

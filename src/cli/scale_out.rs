@@ -39,11 +39,7 @@ pub fn check_options(args: &RenderArgs, several_scenes: bool) -> Result<()> {
             }
         }
     }
-    if let (Some(c), Some(o)) = (&args.checkpoint, &args.output) {
-        if c == o {
-            bail!("--checkpoint {}: the checkpoint needs a file of its own, not the output's", c.display());
-        }
-    }
+    // Whether the checkpoint is a file of its own is the write plan's to say (cli::render), as files, not strings.
     Ok(())
 }
 
@@ -64,7 +60,7 @@ pub fn frames_of_shard(args: &RenderArgs, plans: Vec<FramePlan>) -> Result<Vec<F
     }
     let Some((shard, by)) = shard(args)? else { return Ok(plans) };
     let (first, end) = shard.range(plans.len() as u32);
-    if !args.quiet {
+    if !args.quiet && first < end {
         eprintln!(
             "strata: shard {}/{} ({by}): frames {} to {} of {}",
             shard.index,
@@ -85,8 +81,11 @@ pub struct FramePart {
     pub writes_part: bool,
     checkpoint: Option<PathBuf>,
     every: std::time::Duration,
-    resume: Option<PathBuf>,
+    /// The part this run goes on from, read before any work.
+    resume: Option<(PathBuf, Part)>,
     quiet: bool,
+    /// Whether the last checkpoint write failed (then an interrupted run has not saved its samples).
+    last_save_failed: std::cell::Cell<bool>,
 }
 
 impl FramePart {
@@ -102,7 +101,13 @@ impl FramePart {
             }
             (None, Some((shard, by))) => {
                 let range = shard.range(spp);
-                if !args.quiet {
+                if range.0 == range.1 {
+                    // More shards than samples: this one has none, as docs/scale-out.md says; not an error.
+                    eprintln!(
+                        "strata: shard {}/{} ({by}) has no samples: {} shards share the frame's {spp}; nothing to do",
+                        shard.index, shard.count, shard.count
+                    );
+                } else if !args.quiet {
                     eprintln!(
                         "strata: shard {}/{} ({by}): samples {}..{} of {spp}",
                         shard.index, shard.count, range.0, range.1
@@ -129,19 +134,23 @@ impl FramePart {
             }
         }
         // A checkpoint left by an earlier run of this command is where this one goes on from.
-        let resume = args.resume.clone().or_else(|| args.checkpoint.clone().filter(|c| c.is_file()));
-        if let Some(path) = &args.resume {
-            if !path.is_file() {
-                bail!("--resume {}: no such file", path.display());
+        // Read (and its header checked) before the device is made: a bad part costs nothing.
+        let resume = match args.resume.clone().or_else(|| args.checkpoint.clone().filter(|c| c.is_file())) {
+            Some(path) => {
+                let part = read_part(&path).context(if args.resume.is_some() { "--resume" } else { "--checkpoint" })?;
+                Some((path, part))
             }
-        }
+            None => None,
+        };
         Ok(Some(FramePart {
             target,
             writes_part,
             checkpoint: args.checkpoint.clone(),
+            // Bounded by the option's parser (at most a day), so the conversion cannot overflow.
             every: std::time::Duration::from_secs_f32(args.checkpoint_every),
             resume,
             quiet: args.quiet,
+            last_save_failed: std::cell::Cell::new(false),
         }))
     }
 
@@ -164,8 +173,7 @@ impl FramePart {
             auto_exposure: settings.auto_exposure,
         };
         let resumed = match &self.resume {
-            Some(path) => {
-                let part = read_part(path)?;
+            Some((path, part)) => {
                 if let Some((field, ours, theirs)) = provenance.difference(&part.provenance) {
                     bail!(
                         "{}: a checkpoint of another render (its {field} is {theirs}, this render's {ours}); remove \
@@ -188,7 +196,7 @@ impl FramePart {
                 let left = part.sums.samples.remaining_of(self.target).with_context(|| {
                     format!(
                         "{}: cannot go on to samples {}..{}",
-                        self.resume.as_ref().expect("resumed").display(),
+                        self.resume.as_ref().expect("resumed").0.display(),
                         self.target.0,
                         self.target.1
                     )
@@ -196,7 +204,7 @@ impl FramePart {
                 if !self.quiet {
                     eprintln!(
                         "strata: going on from {} ({} of {} samples done)",
-                        self.resume.as_ref().expect("resumed").display(),
+                        self.resume.as_ref().expect("resumed").0.display(),
                         part.sums.samples.len(),
                         self.target.1 - self.target.0
                     );
@@ -206,9 +214,17 @@ impl FramePart {
             None => self.target,
         };
         let options = FrameOptions { samples: Some(remaining), keep_sums: self.writes_part, ..Default::default() };
+        // A checkpoint that cannot be written (a full disk) costs the protection, not the render: warn and go on.
         let mut save = |sums: &strata::partial::PartialSums| -> Result<()> {
             let path = self.checkpoint.as_ref().expect("only with --checkpoint");
-            write_part(path, &Part { provenance: provenance.clone(), look, sums: sums.clone() })
+            match write_part(path, &Part { provenance: provenance.clone(), look, sums: sums.clone() }) {
+                Ok(()) => self.last_save_failed.set(false),
+                Err(e) => {
+                    eprintln!("warning: the checkpoint was not saved: {e:#}; the render goes on without it");
+                    self.last_save_failed.set(true);
+                }
+            }
+            Ok(())
         };
         let continuation = Continuation {
             resume: resumed.as_ref().map(|p| &p.sums),
@@ -238,6 +254,16 @@ impl FramePart {
     /// The checkpoint this run saves to, if any.
     pub fn checkpoint(&self) -> Option<&Path> {
         self.checkpoint.as_deref()
+    }
+
+    /// Whether the last checkpoint write failed.
+    pub fn last_save_failed(&self) -> bool {
+        self.last_save_failed.get()
+    }
+
+    /// A shard with no samples (more shards than samples): nothing to render or write.
+    pub fn is_empty(&self) -> bool {
+        self.target.0 == self.target.1
     }
 
     /// Once the output is written the checkpoint has served: removed, so that a later run starts afresh.

@@ -3,7 +3,8 @@
 //! belongs to (strata version, device, scene, settings, seed), which samples it holds, and how the frame is
 //! resolved, so that `strata merge` needs nothing but the parts. Written atomically like every output.
 use super::{PartialSums, SampleSet};
-use crate::scene::settings::ToneMap;
+use crate::scene::settings::{ToneMap, MAX_EXPOSURE_STOPS, MAX_IMAGE_SIDE, MAX_SPP};
+use crate::shaders::constants::{SUM_FRACTION_BITS, SUM_MAX_SAMPLE_LOG2};
 use anyhow::{anyhow, bail, Context as _, Result};
 use std::path::Path;
 
@@ -103,29 +104,48 @@ pub fn write_part(path: &Path, part: &Part) -> anyhow::Result<()> {
         Image::from_layer(layer)
             .write()
             .to_buffered(std::io::BufWriter::new(file))
-            .map_err(|e| anyhow!(e))
+            .map_err(|e| anyhow!("{e}"))
             .context("encoding the part's EXR")
     })
     .with_context(|| format!("writing the part {}", path.display()))
 }
 
-/// Reads a part; a clear error naming the file when it is not one, is cut short or is inconsistent.
+/// The most counts one sample adds to a channel (`shaders/include/fixed_point.glsl`).
+pub const MAX_COUNTS_PER_SAMPLE: u64 = 1 << (SUM_MAX_SAMPLE_LOG2 + SUM_FRACTION_BITS);
+
+/// Reads a part; a clear error naming the file when it is not one, is cut short, claims more than a render can
+/// make, or is inconsistent. The header is checked before any pixel is read or any memory set aside for them.
 pub fn read_part(path: &Path) -> Result<Part> {
-    read_part_unnamed(path).with_context(|| format!("{}: not a readable strata part", path.display()))
+    let (file, header) = crate::input::exr_header(path, MAX_IMAGE_SIDE as usize, "a part")?;
+    read_checked_part(path, file, &header).with_context(|| format!("{}: not a readable strata part", path.display()))
 }
 
-fn read_part_unnamed(path: &Path) -> anyhow::Result<Part> {
+fn read_checked_part(path: &Path, file: std::fs::File, header: &exr::meta::header::Header) -> Result<Part> {
     use exr::prelude::*;
-    if !path.is_file() {
-        bail!("no such file");
+    let mut expected: Vec<String> = SUM_CHANNELS
+        .iter()
+        .flat_map(|c| [format!("sum_hi.{c}"), format!("sum_lo.{c}")])
+        .chain(["samples.Y".to_string()])
+        .collect();
+    expected.sort();
+    let found: Vec<String> = header.channels.list.iter().map(|c| c.name.to_string()).collect();
+    if found != expected || header.channels.list.iter().any(|c| c.sample_type != SampleType::U32) {
+        bail!(
+            "its channels are {}, a part's are the 32-bit integer channels {}",
+            crate::input::excerpt(&found.join(", "), 200),
+            expected.join(", ")
+        );
     }
+    let pixels = header.layer_size.0 as u64 * header.layer_size.1 as u64;
+    // The decoded channels, then the 64-bit sums made of them.
+    crate::input::ensure_memory(pixels * (4 * 9 + 8 * 4), path, "the part's pixels")?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(std::io::BufReader::new(file))
         .map_err(|e| anyhow!("{e}"))?;
     let layer = &image.layer_data;
     let field = |key: &str| -> anyhow::Result<String> {
@@ -137,15 +157,17 @@ fn read_part_unnamed(path: &Path) -> anyhow::Result<Part> {
     };
     let format = field("strata.format")?;
     if format != FORMAT {
-        bail!("part format {format:?}, this strata reads {FORMAT:?}");
+        bail!("part format {:?}, this strata reads {FORMAT:?}", crate::input::excerpt(&format, 40));
     }
     let number = |key: &str| -> anyhow::Result<u64> {
         let text = field(key)?;
-        text.parse().map_err(|_| anyhow!("header field {key} is {text:?}, not a whole number"))
+        text.parse()
+            .map_err(|_| anyhow!("header field {key} is {:?}, not a whole number", crate::input::excerpt(&text, 40)))
     };
     let boolean = |key: &str| -> anyhow::Result<bool> {
         let text = field(key)?;
-        text.parse().map_err(|_| anyhow!("header field {key} is {text:?}, not true or false"))
+        text.parse()
+            .map_err(|_| anyhow!("header field {key} is {:?}, not true or false", crate::input::excerpt(&text, 40)))
     };
     let provenance = Provenance {
         strata_version: field("strata.version")?,
@@ -155,19 +177,30 @@ fn read_part_unnamed(path: &Path) -> anyhow::Result<Part> {
         seed: number("strata.seed")?,
     };
     let exposure_bits = field("strata.exposure")?;
+    let exposure = f32::from_bits(u32::from_str_radix(&exposure_bits, 16).map_err(|_| {
+        anyhow!("header field strata.exposure is {:?}, not 8 hex digits", crate::input::excerpt(&exposure_bits, 40))
+    })?);
+    // As strictly as the render's own --exposure.
+    if !(exposure.is_finite() && exposure.abs() <= MAX_EXPOSURE_STOPS) {
+        bail!("header field strata.exposure is {exposure}, not a number of stops between -{MAX_EXPOSURE_STOPS} and {MAX_EXPOSURE_STOPS}");
+    }
     let look = PartLook {
-        exposure: f32::from_bits(
-            u32::from_str_radix(&exposure_bits, 16)
-                .map_err(|_| anyhow!("header field strata.exposure is {exposure_bits:?}, not 8 hex digits"))?,
-        ),
+        exposure,
         tone_map: ToneMap::parse(&field("strata.tone_map")?)?,
         transparent: boolean("strata.transparent")?,
         auto_exposure: boolean("strata.auto_exposure")?,
     };
-    let spp = u32::try_from(number("strata.spp")?).map_err(|_| anyhow!("strata.spp is out of range"))?;
+    let spp = number("strata.spp")?;
+    if !(1..=u64::from(MAX_SPP)).contains(&spp) {
+        bail!("header field strata.spp is {spp}; a frame has 1 to {MAX_SPP} samples");
+    }
+    let spp = spp as u32;
     let samples = SampleSet::parse(&field("strata.samples")?).context("header field strata.samples")?;
+    if samples.is_empty() {
+        bail!("it holds no samples (strata.samples is \"-\"): there is nothing to merge");
+    }
     if samples.ranges().last().is_some_and(|&(_, end)| end > spp) {
-        bail!("it holds samples {samples}, beyond the frame's {spp}");
+        bail!("it holds samples {}, beyond the frame's {spp}", crate::input::excerpt(&samples.to_string(), 80));
     }
     let (width, height) = (layer.size.0 as u32, layer.size.1 as u32);
     let pixels = layer.size.0 * layer.size.1;
@@ -182,12 +215,23 @@ fn read_part_unnamed(path: &Path) -> anyhow::Result<Part> {
     if let Some(p) = channel("samples.Y")?.iter().position(|&n| n != samples.len()) {
         bail!("pixel {p} counts {} samples, the header {}", channel("samples.Y")?[p], samples.len());
     }
+    // No render makes more than this: a larger sum is damage, not light.
+    let most = u64::from(samples.len()) * MAX_COUNTS_PER_SAMPLE;
     let mut counts = vec![0u64; pixels * 4];
     for (c, name) in SUM_CHANNELS.iter().enumerate() {
         let hi = channel(&format!("sum_hi.{name}"))?;
         let lo = channel(&format!("sum_lo.{name}"))?;
         for p in 0..pixels {
-            counts[p * 4 + c] = (u64::from(hi[p]) << 32) | u64::from(lo[p]);
+            let count = (u64::from(hi[p]) << 32) | u64::from(lo[p]);
+            if count > most {
+                bail!(
+                    "pixel ({}, {}) sums {count} counts in channel {name}, more than {} samples can make ({most})",
+                    p % layer.size.0,
+                    p / layer.size.0,
+                    samples.len()
+                );
+            }
+            counts[p * 4 + c] = count;
         }
     }
     Ok(Part { provenance, look, sums: PartialSums { width, height, spp, samples, counts } })

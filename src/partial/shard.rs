@@ -70,7 +70,8 @@ fn from_scheduler(var: &dyn Fn(&str) -> Option<String>, given: Option<u32>) -> R
             }
         }
         if index0 >= count {
-            bail!("{scheduler}'s task {} is beyond its {count} tasks", index0 + 1);
+            // Counted in 64 bits: task 4294967295 must not print as task 0.
+            bail!("{scheduler}'s task {} is beyond its {count} tasks", u64::from(index0) + 1);
         }
         Ok((Shard { index: index0 + 1, count }, scheduler))
     };
@@ -173,6 +174,9 @@ mod tests {
             (Shard { index: 7, count: 7 }, "AWS Batch")
         );
         assert!(ShardSpec::Auto { count: Some(6) }.resolve(&env(&aws)).is_err(), "index beyond the count");
+        let last = [("JOB_COMPLETION_INDEX", "4294967295")];
+        let err = ShardSpec::Auto { count: Some(4) }.resolve(&env(&last)).unwrap_err().to_string();
+        assert!(err.contains("task 4294967296 is beyond its 4 tasks"), "{err}");
     }
 
     #[test]

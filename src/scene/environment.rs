@@ -6,7 +6,7 @@
 //! u = ½ + φ/2π, v = θ/π. The image's centre faces −Z (what a default glTF camera looks at) and +X is a quarter
 //! of the width to its right, as a panorama looks from inside. `rotation_degrees` turns the environment about +Y
 //! (counter-clockwise seen from above), `intensity` scales its radiance.
-use anyhow::{anyhow, bail, Context as _, Result};
+use anyhow::{anyhow, bail, Result};
 use glam::Vec3;
 use std::f32::consts::PI;
 use std::path::Path;
@@ -96,36 +96,16 @@ impl Environment {
     }
 
     /// Reads an equirectangular image: Radiance `.hdr` or OpenEXR `.exr` (its RGB layer), chosen by extension.
+    /// Only a regular file; its header is checked against [`MAX_SIDE`] and the file's length, and the memory
+    /// for its texels asked for, before any texel is decoded.
     pub fn load(path: &Path) -> Result<Self> {
         let name = path.display().to_string();
-        if !path.is_file() {
-            bail!("{name}: no such file");
-        }
+        // What is there first: /dev/zero is a device before it is a name without an extension.
+        crate::input::open_regular(path)?;
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         let (width, height, texels) = match ext.as_deref() {
-            Some("hdr") => {
-                let image = image::ImageReader::open(path)
-                    .with_context(|| format!("{name}: cannot open"))?
-                    .with_guessed_format()?
-                    .decode()
-                    .map_err(|e| anyhow!("{name}: not a Radiance HDR image: {e}"))?
-                    .to_rgb32f();
-                let (w, h) = image.dimensions();
-                (w, h, image.pixels().map(|p| Vec3::from_array(p.0)).collect())
-            }
-            Some("exr") => {
-                let image = exr::prelude::read_first_rgba_layer_from_file(
-                    path,
-                    |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
-                    |(width, pixels): &mut (usize, Vec<Vec3>), position, (r, g, b, _a): (f32, f32, f32, f32)| {
-                        pixels[position.y() * *width + position.x()] = Vec3::new(r, g, b);
-                    },
-                )
-                .map_err(|e| anyhow!("{name}: not an OpenEXR image with RGB channels: {e}"))?;
-                let layer = image.layer_data;
-                let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
-                (w, h, layer.channel_data.pixels.1)
-            }
+            Some("hdr") => load_hdr(path)?,
+            Some("exr") => load_exr(path)?,
             Some(other) => bail!("{name}: unknown environment extension \".{other}\" (use .hdr or .exr)"),
             None => bail!("{name}: environment file has no extension (use .hdr or .exr)"),
         };
@@ -170,6 +150,70 @@ impl Environment {
         }
         sum / weight.max(1e-30) * self.intensity
     }
+}
+
+/// The bytes of linear RGB texels an environment of `width × height` holds.
+fn texel_bytes(width: u64, height: u64) -> u64 {
+    width * height * std::mem::size_of::<Vec3>() as u64
+}
+
+fn check_side(path: &Path, width: u64, height: u64) -> Result<()> {
+    if width == 0 || height == 0 || width > u64::from(MAX_SIDE) || height > u64::from(MAX_SIDE) {
+        bail!(
+            "{}: its header claims {width}x{height} texels; an environment is 1 to {MAX_SIDE} texels a side",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// A Radiance `.hdr`: the header first, then the texels decoded straight into the environment's own storage.
+fn load_hdr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+    use image::ImageDecoder as _;
+    let name = path.display();
+    let (file, len) = crate::input::open_regular(path)?;
+    let decoder = image::codecs::hdr::HdrDecoder::new(std::io::BufReader::new(file))
+        .map_err(|e| anyhow!("{name}: not a Radiance HDR image: {e}"))?;
+    let (w, h) = decoder.dimensions();
+    check_side(path, w.into(), h.into())?;
+    // Every scanline, however well compressed, takes at least 4 bytes; and no run-length coding packs a file
+    // past the bound of every image strata reads.
+    if len < 4 * u64::from(h) {
+        bail!("{name}: its header claims {w}x{h} texels, but the file holds only {len} bytes (cut short?)");
+    }
+    crate::input::check_packing(path, u64::from(w) * u64::from(h) * 4, len)?;
+    let bytes = texel_bytes(w.into(), h.into());
+    crate::input::ensure_memory(bytes, path, "its texels")?;
+    let mut texels = vec![Vec3::ZERO; w as usize * h as usize];
+    decoder
+        .read_image(bytemuck::cast_slice_mut(&mut texels))
+        .map_err(|e| anyhow!("{name}: the Radiance HDR image does not decode: {e}"))?;
+    Ok((w, h, texels))
+}
+
+/// An OpenEXR image's RGB channels: the header first, then the texels.
+fn load_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+    use exr::prelude::*;
+    let name = path.display();
+    let (file, header) = crate::input::exr_header(path, MAX_SIDE as usize, "an environment")?;
+    let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+    crate::input::ensure_memory(texel_bytes(w, h), path, "its texels")?;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size, _| (size.width(), vec![Vec3::ZERO; size.width() * size.height()]),
+            |(width, pixels): &mut (usize, Vec<Vec3>), position, (r, g, b, _a): (f32, f32, f32, f32)| {
+                pixels[position.y() * *width + position.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(std::io::BufReader::new(file))
+        .map_err(|e| anyhow!("{name}: not an OpenEXR image with RGB channels: {e}"))?;
+    let layer = image.layer_data;
+    let (w, h) = (layer.size.width() as u32, layer.size.height() as u32);
+    Ok((w, h, layer.channel_data.pixels.1))
 }
 
 /// An image-frame direction's equirectangular coordinates in [0, 1]².

@@ -27,13 +27,13 @@ pub struct LoadOptions {
     pub uri_policy: UriPolicy,
 }
 
+/// The largest glTF file read: a `.glb`'s header counts its length in 32 bits.
+pub const MAX_GLTF_BYTES: u64 = u32::MAX as u64;
+
 /// Loads a `.gltf` or `.glb` file.
 pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    let bytes = match std::fs::read(path) {
-        Ok(b) => b,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => bail!("{}: no such file", path.display()),
-        Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
-    };
+    // A regular file, at most what a .glb's 32-bit length can say: not a FIFO, a directory or /dev/zero.
+    let bytes = crate::input::read_bounded(path, MAX_GLTF_BYTES, "a glTF file")?;
     let base = path.parent().unwrap_or(Path::new("."));
     load_gltf_bytes(&bytes, base, options).with_context(|| path.display().to_string()).map(|mut scene| {
         scene.source = path.to_path_buf();

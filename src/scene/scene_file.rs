@@ -9,7 +9,7 @@ use super::material::{BumpDerivative, BumpMap, NoiseKind};
 use super::settings::{Backdrop, Primary, SamplerKind, SettingsOverrides, ToneMap, Trace};
 use super::settings::{MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
-use anyhow::{anyhow, bail, Context as _, Result};
+use anyhow::{anyhow, bail, Result};
 use glam::{Vec2, Vec3};
 use serde::Deserialize;
 use std::ops::Range;
@@ -192,21 +192,24 @@ impl Source<'_> {
     }
 }
 
+/// The largest scene file read (they are a few hundred bytes; this is far past any real one).
+pub const MAX_SCENE_FILE_BYTES: u64 = 16 << 20;
+
 /// Loads `path` (a scene file) and the glTF it names, and applies the file to the scene.
 pub fn load_scene_file(path: &Path, uri_policy: Option<UriPolicy>) -> Result<SceneFile> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => bail!("{}: no such file", path.display()),
-        Err(e) => return Err(e).with_context(|| format!("{}: cannot read", path.display())),
-    };
+    let text = crate::input::read_text_bounded(path, MAX_SCENE_FILE_BYTES, "a scene file")?;
     let source = Source { path, text: &text };
     let root = parse(&source)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let gltf_path = dir.join(root.gltf.get_ref());
     let policy =
         uri_policy.unwrap_or(if root.allow_any_uri { UriPolicy::AnyLocalPath } else { UriPolicy::InsideDirectory });
-    if !gltf_path.is_file() {
+    if !gltf_path.exists() {
         return Err(source.error(root.gltf.span(), format!("the glTF file {} does not exist", gltf_path.display())));
+    }
+    if !gltf_path.is_file() {
+        let what = if gltf_path.is_dir() { "a directory" } else { "not a regular file" };
+        return Err(source.error(root.gltf.span(), format!("the glTF file {} is {what}", gltf_path.display())));
     }
     let mut scene = load_gltf(&gltf_path, &LoadOptions { uri_policy: policy })?;
     apply(&source, &root, &mut scene)?;

@@ -56,7 +56,7 @@ impl ToneMap {
     }
 }
 
-/// Where each sample's visible surface comes from (DESIGN.md, "One frame").
+/// Where each sample's visible surface comes from (docs/architecture.md, "One frame").
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Primary {
     /// The raster G-buffer pass: fast, but within one sample every pixel shares the pixel jitter and lens point.
@@ -139,6 +139,9 @@ impl Backdrop {
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// Largest samples-per-pixel count accepted: more is a typo, not a render.
 pub const MAX_SPP: u32 = 65536;
+/// The largest exposure, in stops either way (2^64: far past any picture; beyond it the PNG is all black or all
+/// white).
+pub const MAX_EXPOSURE_STOPS: f32 = 64.0;
 /// Most bounces a path may take after the visible surface (each costs a ray and a shadow ray per pixel).
 pub const MAX_BOUNCES: u32 = 16;
 

@@ -1,16 +1,10 @@
-//! Bad input, as a table: each case is a file that differs from a valid one by one defect, and the error it
+//! Bad scenes, as a table: each case is a file that differs from a valid one by one defect, and the error it
 //! must give. Every error names the file; nothing panics. The command-line cases also check the exit status
 //! and that no output file appears.
+use crate::common::cli::temp_dir;
 use base64::Engine as _;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("strata-bad-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn b64(bytes: &[u8]) -> String {
     format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
