@@ -1,5 +1,6 @@
 //! Physical device selection (rendering needs ray queries or a ray-tracing pipeline; discrete, then integrated,
 //! then CPU) and the logical device that owns the queue, the allocator and the extension loaders.
+use super::features::{DeviceFeatures, FeatureExtensions};
 use super::instance::{version_string, Instance, API_VERSION};
 use super::pipeline::KeptPipelines;
 use super::shader_binding_table::ShaderGroupLimits;
@@ -172,49 +173,24 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         missing_for_pipeline.push(ash::khr::ray_tracing_pipeline::NAME.to_string_lossy().into_owned());
     }
     if properties.api_version >= API_VERSION {
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-        let mut rt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
-        let mut features = vk::PhysicalDeviceFeatures2::default().push_next(&mut v12).push_next(&mut v13);
-        // Only chain extension structures the device knows (VUID-VkPhysicalDeviceFeatures2-pNext-pNext).
-        if has(ash::khr::acceleration_structure::NAME) {
-            features = features.push_next(&mut accel);
-        }
-        if has(ash::khr::ray_query::NAME) {
-            features = features.push_next(&mut rq);
-        }
-        if has(ash::khr::ray_tracing_pipeline::NAME) {
-            features = features.push_next(&mut rt);
-        }
-        unsafe { raw.get_physical_device_features2(handle, &mut features) };
-        let base = unsafe { raw.get_physical_device_features(handle) };
-        let checks = [
-            (v12.buffer_device_address, "feature bufferDeviceAddress"),
-            (v12.scalar_block_layout, "feature scalarBlockLayout"),
-            (v12.runtime_descriptor_array, "feature runtimeDescriptorArray"),
-            (v12.descriptor_binding_partially_bound, "feature descriptorBindingPartiallyBound"),
-            (v12.descriptor_binding_variable_descriptor_count, "feature descriptorBindingVariableDescriptorCount"),
-            (v12.shader_sampled_image_array_non_uniform_indexing, "feature shaderSampledImageArrayNonUniformIndexing"),
-            (v12.host_query_reset, "feature hostQueryReset"),
-            (base.shader_int64, "feature shaderInt64"),
-            (v13.dynamic_rendering, "feature dynamicRendering"),
-            (v13.synchronization2, "feature synchronization2"),
-            // SPIR-V 1.6 compute shaders declare their size with LocalSizeId (VUID-RuntimeSpirv-LocalSizeId-06434).
-            (v13.maintenance4, "feature maintenance4"),
-            (accel.acceleration_structure, "feature accelerationStructure"),
-        ];
-        for (value, label) in checks {
-            if value == vk::FALSE && !missing.iter().any(|m| label.ends_with(m.as_str())) {
-                missing.push(label.to_string());
+        let extensions_there = FeatureExtensions {
+            acceleration_structure: has(ash::khr::acceleration_structure::NAME),
+            ray_query: has(ash::khr::ray_query::NAME),
+            ray_tracing_pipeline: has(ash::khr::ray_tracing_pipeline::NAME),
+        };
+        let mut queried = DeviceFeatures::default();
+        queried.chain(extensions_there, |features| unsafe { raw.get_physical_device_features2(handle, features) });
+        for name in queried.lacking() {
+            let label = format!("feature {name}");
+            if !missing.iter().any(|m| label.ends_with(m.as_str())) {
+                missing.push(label);
             }
         }
         // The extension names already say what is missing when the extension itself is absent.
-        if has(ash::khr::ray_query::NAME) && rq.ray_query == vk::FALSE {
+        if has(ash::khr::ray_query::NAME) && queried.ray_query.ray_query == vk::FALSE {
             missing_for_query.push("feature rayQuery".into());
         }
-        if has(ash::khr::ray_tracing_pipeline::NAME) && rt.ray_tracing_pipeline == vk::FALSE {
+        if has(ash::khr::ray_tracing_pipeline::NAME) && queried.ray_tracing_pipeline.ray_tracing_pipeline == vk::FALSE {
             missing_for_pipeline.push("feature rayTracingPipeline".into());
         }
         ray_query = missing_for_query.is_empty();
@@ -404,40 +380,18 @@ impl Device {
         if pipelines {
             extensions.push(ash::khr::ray_tracing_pipeline::NAME.as_ptr());
         }
-        let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
-            .buffer_device_address(true)
-            .scalar_block_layout(true)
-            .descriptor_indexing(true)
-            .runtime_descriptor_array(true)
-            .shader_sampled_image_array_non_uniform_indexing(true)
-            .descriptor_binding_partially_bound(true)
-            .descriptor_binding_variable_descriptor_count(true)
-            .host_query_reset(true);
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true)
-            .maintenance4(true);
-        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
-        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-        let mut rt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
-        let base_features = vk::PhysicalDeviceFeatures::default().shader_int64(true);
-        let mut features = vk::PhysicalDeviceFeatures2::default()
-            .features(base_features)
-            .push_next(&mut v12)
-            .push_next(&mut v13)
-            .push_next(&mut accel);
-        if ray_queries {
-            features = features.push_next(&mut rq);
-        }
-        if pipelines {
-            features = features.push_next(&mut rt);
-        }
-        let create_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_info)
-            .enabled_extension_names(&extensions)
-            .push_next(&mut features);
-        let raw = unsafe { instance.raw.create_device(physical, &create_info, None) }
-            .with_context(|| format!("vkCreateDevice on {}", report.name))?;
+        // The table of vk::features, as the support check read it.
+        let mut enabled = DeviceFeatures::to_enable(ray_queries, pipelines);
+        let chained =
+            FeatureExtensions { acceleration_structure: true, ray_query: ray_queries, ray_tracing_pipeline: pipelines };
+        let created = enabled.chain(chained, |features| {
+            let create_info = vk::DeviceCreateInfo::default()
+                .queue_create_infos(&queue_info)
+                .enabled_extension_names(&extensions)
+                .push_next(features);
+            unsafe { instance.raw.create_device(physical, &create_info, None) }
+        });
+        let raw = created.with_context(|| format!("vkCreateDevice on {}", report.name))?;
         let queue = unsafe { raw.get_device_queue(queue_family, 0) };
 
         let allocator = Allocator::new(&AllocatorCreateDesc {

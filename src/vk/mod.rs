@@ -4,6 +4,7 @@ pub mod commands;
 pub mod context;
 pub mod descriptors;
 pub mod device;
+pub mod features;
 pub mod instance;
 pub mod memory;
 pub mod pipeline;
