@@ -115,7 +115,7 @@ pub fn page(summary: &RunSummary, out: &Path) -> String {
         escape(&e.strata_version),
         escape(&e.trace),
         escape(&e.goldens),
-        escape(&super::report::counts(summary)),
+        escape(&summary.counts()),
         summary.seconds
     );
     for note in &summary.unused_allows {

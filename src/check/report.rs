@@ -80,17 +80,6 @@ pub fn failures_csv(summary: &RunSummary) -> String {
 }
 
 /// One line per status with a count, in `Status::ALL` order.
-pub fn counts(summary: &RunSummary) -> String {
-    Status::ALL
-        .iter()
-        .filter_map(|s| {
-            let n = summary.count(*s);
-            (n > 0).then(|| format!("{n} {s}"))
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 pub fn markdown(summary: &RunSummary) -> String {
     let e = &summary.environment;
     let verdict = if summary.unexpected().next().is_none() { "passed" } else { "FAILED" };
@@ -105,7 +94,7 @@ pub fn markdown(summary: &RunSummary) -> String {
         e.validation_layer,
         e.strata_version,
         e.trace,
-        counts(summary),
+        summary.counts(),
         summary.seconds
     );
     let problems: Vec<&CaseResult> = summary.unexpected().collect();

@@ -95,6 +95,18 @@ impl RunSummary {
     pub fn count(&self, status: Status) -> usize {
         self.results.iter().filter(|r| r.status == status).count()
     }
+
+    /// "18 Pass, 2 Fail": each status that occurred, with its count (every report's headline).
+    pub fn counts(&self) -> String {
+        Status::ALL
+            .iter()
+            .filter_map(|s| {
+                let n = self.count(*s);
+                (n > 0).then(|| format!("{n} {s}"))
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 /// The cases a run takes: `--quick` or all (canaries always), those `--cases` matches, then `--fraction`.

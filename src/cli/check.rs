@@ -83,7 +83,7 @@ pub fn check(args: CheckArgs) -> Result<bool> {
         e.device,
         e.driver,
         e.driver_info,
-        report::counts(&summary),
+        summary.counts(),
         summary.seconds
     );
     for note in &summary.unused_allows {

@@ -615,27 +615,3 @@ fn resolve_only(
         sums: keep_sums.then(|| sums.clone()),
     })
 }
-
-/// The middle grey photographic tone reproduction maps the log-average luminance to (Reinhard et al.,
-/// "Photographic Tone Reproduction for Digital Images", SIGGRAPH 2002: the key value a).
-pub const MIDDLE_GREY: f32 = 0.18;
-
-/// The exposure in stops that maps a frame's log-average luminance exp(mean ln(δ + L)) to middle grey, over the
-/// pixels something covers when the background is transparent (else every pixel); within ±24 stops.
-pub fn auto_exposure(frame: &Frame, covered_only: bool) -> f32 {
-    let luminance = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
-    let (mut sum, mut n) = (0.0f64, 0u64);
-    for p in frame.pixels.iter().filter(|p| !covered_only || p[3] > 0.0) {
-        // Covered fractionally: the colour is premultiplied, so the luminance of the surface is L / alpha.
-        let l = if covered_only { luminance(p) / p[3] } else { luminance(p) };
-        if l.is_finite() {
-            sum += f64::from(1e-4 + l.max(0.0)).ln();
-            n += 1;
-        }
-    }
-    if n == 0 {
-        return 0.0;
-    }
-    let log_average = (sum / n as f64).exp() as f32;
-    (MIDDLE_GREY / log_average).log2().clamp(-24.0, 24.0)
-}

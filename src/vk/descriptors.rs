@@ -2,10 +2,36 @@
 //! buffers, images and acceleration structures by binding number.
 use super::device::Device;
 use super::memory::{Buffer, Image};
-use super::pipeline::Binding;
 use anyhow::{Context as _, Result};
 use ash::vk;
 use std::sync::Arc;
+
+/// One descriptor binding of a pipeline's single set.
+#[derive(Debug, Clone, Copy)]
+pub struct Binding {
+    pub binding: u32,
+    pub kind: vk::DescriptorType,
+    pub count: u32,
+    /// An array of up to `count` descriptors of which each set fills as many as it needs (partially bound, its
+    /// size given when the set is allocated): the set's last binding, so that one pipeline serves every size.
+    pub variable: bool,
+}
+
+impl Binding {
+    pub const fn new(binding: u32, kind: vk::DescriptorType) -> Self {
+        Self { binding, kind, count: 1, variable: false }
+    }
+
+    /// A fixed array of `count` descriptors.
+    pub const fn array(binding: u32, kind: vk::DescriptorType, count: u32) -> Self {
+        Self { binding, kind, count, variable: false }
+    }
+
+    /// An array of up to `max` descriptors, sized per set (descriptorBindingVariableDescriptorCount).
+    pub const fn variable_array(binding: u32, kind: vk::DescriptorType, max: u32) -> Self {
+        Self { binding, kind, count: max, variable: true }
+    }
+}
 
 pub struct DescriptorSet {
     pub raw: vk::DescriptorSet,

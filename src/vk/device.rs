@@ -2,14 +2,22 @@
 //! then CPU) and the logical device that owns the queue, the allocator and the extension loaders.
 use super::features::{DeviceFeatures, FeatureExtensions};
 use super::instance::{version_string, Instance, API_VERSION};
-use super::pipeline::KeptPipelines;
-use super::shader_binding_table::ShaderGroupLimits;
+use super::kept_pipelines::KeptPipelines;
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::CStr;
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
+
+/// `VkPhysicalDeviceRayTracingPipelinePropertiesKHR`'s shader-group limits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ShaderGroupLimits {
+    pub handle_size: u32,
+    pub handle_alignment: u32,
+    pub base_alignment: u32,
+    pub max_recursion_depth: u32,
+}
 
 /// Device extensions strata cannot run without. Deferred host operations is required by
 /// `VK_KHR_acceleration_structure` (Vulkan spec, extension dependencies). Rays are traced with one of

@@ -6,12 +6,14 @@ pub mod descriptors;
 pub mod device;
 pub mod features;
 pub mod instance;
+pub mod kept_pipelines;
 pub mod memory;
 pub mod pipeline;
 pub mod readback;
 pub mod sampler;
 pub mod shader_binding_table;
 pub mod timer;
+pub mod upload;
 pub mod validation;
 
 pub use context::{Gpu, GpuOptions};

@@ -2,11 +2,12 @@
 //! per pipeline, compute pipelines, ray-tracing pipelines and dynamic-rendering graphics pipelines. A pass owns
 //! its graphics pipeline; compute and ray-tracing pipelines are kept by the device (`KeptPipelines`) and shared by
 //! every pass that asks for the same.
+pub use super::descriptors::Binding;
 use super::descriptors::DescriptorSet;
 use super::device::Device;
+use super::kept_pipelines::{KeptHandles, PipelineKey};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
-use std::collections::HashMap;
 use std::ffi::CStr;
 use std::sync::Arc;
 
@@ -40,33 +41,6 @@ impl Drop for ShaderModule {
     }
 }
 
-/// One descriptor binding of a pipeline's single set.
-#[derive(Debug, Clone, Copy)]
-pub struct Binding {
-    pub binding: u32,
-    pub kind: vk::DescriptorType,
-    pub count: u32,
-    /// An array of up to `count` descriptors of which each set fills as many as it needs (partially bound, its
-    /// size given when the set is allocated): the set's last binding, so that one pipeline serves every size.
-    pub variable: bool,
-}
-
-impl Binding {
-    pub const fn new(binding: u32, kind: vk::DescriptorType) -> Self {
-        Self { binding, kind, count: 1, variable: false }
-    }
-
-    /// A fixed array of `count` descriptors.
-    pub const fn array(binding: u32, kind: vk::DescriptorType, count: u32) -> Self {
-        Self { binding, kind, count, variable: false }
-    }
-
-    /// An array of up to `max` descriptors, sized per set (descriptorBindingVariableDescriptorCount).
-    pub const fn variable_array(binding: u32, kind: vk::DescriptorType, max: u32) -> Self {
-        Self { binding, kind, count: max, variable: true }
-    }
-}
-
 /// A pipeline, its layout and its descriptor-set layout (set 0).
 pub struct Pipeline {
     pub raw: vk::Pipeline,
@@ -79,55 +53,6 @@ pub struct Pipeline {
     /// The handles belong to the device's `KeptPipelines`, which destroys them with the device.
     kept_by_device: bool,
     device: Arc<Device>,
-}
-
-/// Everything a kept pipeline is built from: two requests with equal keys get the same pipeline.
-#[derive(PartialEq, Eq, Hash)]
-struct PipelineKey {
-    name: String,
-    bind_point: vk::PipelineBindPoint,
-    /// Each stage's SPIR-V, in the order the pipeline's builder takes them.
-    spirv: Vec<Vec<u8>>,
-    bindings: Vec<(u32, vk::DescriptorType, u32, bool)>,
-    push_constant_size: u32,
-    constants: Vec<u32>,
-}
-
-#[derive(Clone, Copy)]
-struct KeptHandles {
-    raw: vk::Pipeline,
-    layout: vk::PipelineLayout,
-    set_layout: vk::DescriptorSetLayout,
-}
-
-/// The compute and ray-tracing pipelines a device keeps until it is destroyed. Building one is the costly part
-/// of a pass on lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about
-/// 0.8 s, 2 s under the validation layer; docs/performance.md), and every render builds its passes anew; kept, a
-/// program that renders many frames on one device (an animation, the benchmark, the test suite) builds each
-/// variant once.
-#[derive(Default)]
-pub struct KeptPipelines(HashMap<PipelineKey, KeptHandles>);
-
-impl KeptPipelines {
-    /// How many distinct pipelines the device holds.
-    pub fn len(&self) -> usize {
-        self.0.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
-
-    /// Destroys every kept pipeline; only while the device is being destroyed, when no pass can use them.
-    pub(crate) unsafe fn destroy_all(&mut self, device: &ash::Device) {
-        for (_, h) in self.0.drain() {
-            unsafe {
-                device.destroy_pipeline(h.raw, None);
-                device.destroy_pipeline_layout(h.layout, None);
-                device.destroy_descriptor_set_layout(h.set_layout, None);
-            }
-        }
-    }
 }
 
 /// The shaders and layout of a ray-tracing pipeline (`Pipeline::ray_tracing`): (file name, SPIR-V) each.

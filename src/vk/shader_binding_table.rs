@@ -5,20 +5,12 @@
 //! read from the device (lavapipe 32/16/32 for handle size/alignment/base alignment; NVIDIA's base alignment is
 //! 64), never assumed, and the buffer's address is itself checked.
 use super::device::Device;
+pub use super::device::ShaderGroupLimits;
 use super::memory::{Buffer, MemoryLocation};
 use super::pipeline::Pipeline;
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 use std::sync::Arc;
-
-/// `VkPhysicalDeviceRayTracingPipelinePropertiesKHR`'s shader-group limits.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ShaderGroupLimits {
-    pub handle_size: u32,
-    pub handle_alignment: u32,
-    pub base_alignment: u32,
-    pub max_recursion_depth: u32,
-}
 
 /// Where each region lies in the table, in bytes from its start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
