@@ -286,6 +286,40 @@ pub struct RenderArgs {
     pub gpu: GpuArgs,
 }
 
+impl RenderArgs {
+    /// What the command line says of the render settings (None where it is silent): laid over the defaults and
+    /// the scene file's.
+    pub fn overrides(&self) -> strata::scene::settings::SettingsOverrides {
+        strata::scene::settings::SettingsOverrides {
+            width: self.size.map(|s| s.0),
+            height: self.size.map(|s| s.1),
+            spp: self.spp,
+            sampler: self.sampler,
+            seed: self.seed,
+            background: match self.background {
+                Some(BackgroundArg::Colour(rgb)) => Some(glam::Vec3::from_array(rgb)),
+                _ => None,
+            },
+            backdrop: self.background.map(|b| match b {
+                BackgroundArg::Colour(_) => strata::scene::settings::Backdrop::Colour,
+                BackgroundArg::Environment => strata::scene::settings::Backdrop::Environment,
+                BackgroundArg::Transparent => strata::scene::settings::Backdrop::Transparent,
+            }),
+            exposure: match (self.exposure, self.ev100) {
+                (Some(ExposureArg::Stops(ev)), _) => Some(ev),
+                (_, Some(ev100)) => Some(ev100_stops(ev100)),
+                _ => None,
+            },
+            tone_map: self.tone_map,
+            primary: self.primary,
+            indirect: if self.indirect { Some(true) } else { self.no_indirect.then_some(false) },
+            bounces: self.bounces,
+            trace: self.trace,
+            output: self.output.clone(),
+        }
+    }
+}
+
 #[derive(Args)]
 pub struct InfoArgs {
     /// Also print the devices' validation messages (creates an instance with the layer when installed).

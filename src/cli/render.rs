@@ -1,5 +1,5 @@
 //! `strata render`: load, render, write atomically, summarize.
-use super::args::{BackgroundArg, ExposureArg, Orbit, RenderArgs};
+use super::args::{ExposureArg, Orbit, RenderArgs};
 use super::print_stdout;
 use super::progress::ProgressBar;
 use super::scale_out::{self, FramePart};
@@ -189,35 +189,9 @@ fn render_scene(
     for warning in &loaded.scene.warnings {
         eprintln!("warning: {}: {warning}", scene_path.display());
     }
-    let cli = strata::scene::settings::SettingsOverrides {
-        width: args.size.map(|s| s.0),
-        height: args.size.map(|s| s.1),
-        spp: args.spp,
-        sampler: args.sampler,
-        seed: args.seed,
-        background: match args.background {
-            Some(BackgroundArg::Colour(rgb)) => Some(glam::Vec3::from_array(rgb)),
-            _ => None,
-        },
-        backdrop: args.background.map(|b| match b {
-            BackgroundArg::Colour(_) => Backdrop::Colour,
-            BackgroundArg::Environment => Backdrop::Environment,
-            BackgroundArg::Transparent => Backdrop::Transparent,
-        }),
-        exposure: match (args.exposure, args.ev100) {
-            (Some(ExposureArg::Stops(ev)), _) => Some(ev),
-            (_, Some(ev100)) => Some(super::args::ev100_stops(ev100)),
-            _ => None,
-        },
-        tone_map: args.tone_map,
-        primary: args.primary,
-        indirect: if args.indirect { Some(true) } else { args.no_indirect.then_some(false) },
-        bounces: args.bounces,
-        trace: args.trace,
-        output: args.output.clone(),
-    };
     // Defaults, then the scene file, then the command line.
-    let mut settings = strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&cli);
+    let mut settings =
+        strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&args.overrides());
     settings.auto_exposure = args.exposure == Some(ExposureArg::Auto);
     let output = settings
         .output
@@ -234,34 +208,7 @@ fn render_scene(
     }
     let sequence = sequence_of(args)?;
     let mut scene = loaded.scene;
-    if let Some(path) = &args.environment {
-        scene.environment = Some(if path.as_os_str() == "studio" {
-            strata::scene::environment::Environment::studio(512, 256)
-        } else {
-            strata::scene::environment::Environment::load(path)?
-        });
-    }
-    if let Some(environment) = &mut scene.environment {
-        if let Some(r) = args.environment_rotation {
-            environment.rotation_degrees = r;
-        }
-        if let Some(i) = args.environment_intensity {
-            environment.intensity = i;
-        }
-    } else if args.environment_rotation.is_some() || args.environment_intensity.is_some() {
-        bail!("--environment-rotation and --environment-intensity need an environment (--environment FILE)");
-    }
-    if settings.backdrop == Some(Backdrop::Environment) && scene.environment.is_none() {
-        bail!("--background environment needs an environment (--environment FILE, or [environment] in the scene file)");
-    }
-    if !args.preview && !scene.has_light() {
-        scene.add_default_light();
-        eprintln!(
-            "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
-             (add [[light]] tables in a scene file, or --environment, see docs/scene-format.md)",
-            scene_path.display()
-        );
-    }
+    light_the_scene(args, &mut scene, &settings, scene_path)?;
     let framing = Framing::of(args, &scene, settings.width as f32 / settings.height as f32)?;
     match framing.camera(None) {
         Some(camera) => scene.camera = Some(camera),
@@ -426,6 +373,45 @@ fn render_scene(
     }
     if plans.len() > 1 && !args.quiet {
         eprintln!("strata: {} frames in {:.1} s", finished.len(), started.elapsed().as_secs_f64());
+    }
+    Ok(())
+}
+
+/// The environment the command line names (with its rotation and intensity), and a default key light for a scene
+/// with no light at all.
+fn light_the_scene(
+    args: &RenderArgs,
+    scene: &mut strata::scene::Scene,
+    settings: &strata::scene::settings::RenderSettings,
+    scene_path: &std::path::Path,
+) -> Result<()> {
+    if let Some(path) = &args.environment {
+        scene.environment = Some(if path.as_os_str() == "studio" {
+            strata::scene::environment::Environment::studio(512, 256)
+        } else {
+            strata::scene::environment::Environment::load(path)?
+        });
+    }
+    if let Some(environment) = &mut scene.environment {
+        if let Some(r) = args.environment_rotation {
+            environment.rotation_degrees = r;
+        }
+        if let Some(i) = args.environment_intensity {
+            environment.intensity = i;
+        }
+    } else if args.environment_rotation.is_some() || args.environment_intensity.is_some() {
+        bail!("--environment-rotation and --environment-intensity need an environment (--environment FILE)");
+    }
+    if settings.backdrop == Some(Backdrop::Environment) && scene.environment.is_none() {
+        bail!("--background environment needs an environment (--environment FILE, or [environment] in the scene file)");
+    }
+    if !args.preview && !scene.has_light() {
+        scene.add_default_light();
+        eprintln!(
+            "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
+             (add [[light]] tables in a scene file, or --environment, see docs/scene-format.md)",
+            scene_path.display()
+        );
     }
     Ok(())
 }
