@@ -4,7 +4,7 @@
 //! half-way leaves nothing. Every path collision is tried as given and as at least one other spelling of the same
 //! file (`./`, `../`, absolute, a symlinked directory, a hard link).
 use crate::common::cli::{command, repo_file, stderr, strata, temp_dir};
-use crate::{finishes_within, listing, refused, LONG_RENDER, PROMPTLY};
+use crate::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use std::path::{Path, PathBuf};
 
 /// Whether a message says that two paths are one file (as the same text, or as two spellings).
@@ -71,34 +71,12 @@ fn a_checkpoint_never_lands_on_an_output() {
     assert!(!dir.join("out.png").exists());
 }
 
-/// Two parts (written by the library, no render needed) that merge.
+/// Two parts (written by the library, no render needed) that merge: samples 0..2 and 2..4 of a 4×2 frame.
 fn two_parts(dir: &Path) -> (PathBuf, PathBuf) {
-    use strata::partial::file::{write_part, Part, PartLook, Provenance};
-    let part = |range: (u32, u32)| Part {
-        provenance: Provenance {
-            strata_version: env!("CARGO_PKG_VERSION").into(),
-            device: "a test".into(),
-            scene: "fnv1a64:1".into(),
-            settings: "fnv1a64:2".into(),
-            seed: 0,
-        },
-        look: PartLook {
-            exposure: 0.0,
-            tone_map: strata::scene::settings::ToneMap::Clamp,
-            transparent: false,
-            auto_exposure: false,
-        },
-        sums: strata::partial::PartialSums {
-            width: 4,
-            height: 2,
-            spp: 4,
-            samples: strata::partial::SampleSet::range(range.0, range.1),
-            counts: vec![1 << 23; 4 * 2 * 4],
-        },
-    };
+    use strata::partial::{file::write_part, SampleSet};
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-    write_part(&a, &part((0, 2))).unwrap();
-    write_part(&b, &part((2, 4))).unwrap();
+    write_part(&a, &part(4, 2, 4, SampleSet::range(0, 2), 1 << 23)).unwrap();
+    write_part(&b, &part(4, 2, 4, SampleSet::range(2, 4), 1 << 23)).unwrap();
     (a, b)
 }
 

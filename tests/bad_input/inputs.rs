@@ -4,10 +4,10 @@
 //! as what they are; shards beyond the sample count are empty, not errors; counts cannot wrap.
 use crate::common::cli::{command, repo_file, stderr, strata, temp_dir};
 use crate::destinations::make_fifo;
-use crate::{finishes_within, listing, refused, LONG_RENDER, PROMPTLY};
+use crate::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-use strata::partial::file::{write_part, Part, PartLook, Provenance};
+use strata::partial::file::write_part;
 
 fn cornell() -> String {
     repo_file("scenes/cornell.toml").display().to_string()
@@ -15,32 +15,6 @@ fn cornell() -> String {
 
 fn s(p: &Path) -> String {
     p.display().to_string()
-}
-
-/// A part of a `width × height` frame of `spp` samples holding `samples`, every sum `count`.
-fn part(width: u32, height: u32, spp: u32, samples: strata::partial::SampleSet, count: u64) -> Part {
-    Part {
-        provenance: Provenance {
-            strata_version: env!("CARGO_PKG_VERSION").into(),
-            device: "a test".into(),
-            scene: "fnv1a64:1".into(),
-            settings: "fnv1a64:2".into(),
-            seed: 0,
-        },
-        look: PartLook {
-            exposure: 0.0,
-            tone_map: strata::scene::settings::ToneMap::Clamp,
-            transparent: false,
-            auto_exposure: false,
-        },
-        sums: strata::partial::PartialSums {
-            width,
-            height,
-            spp,
-            samples,
-            counts: vec![count; width as usize * height as usize * 4],
-        },
-    }
 }
 
 /// Rewrites an OpenEXR file's data and display windows to claim a `width × height` image (the rest of the file,

@@ -57,3 +57,36 @@ pub const LONG_RENDER: [&str; 4] = ["--size", "512x512", "--spp", "65536"];
 
 /// How long a refusal before any work may take before it counts as a hang (it takes milliseconds).
 pub const PROMPTLY: Duration = Duration::from_secs(60);
+
+/// A part of a `width × height` frame of `spp` samples holding `samples`, every sum `count`.
+pub fn part(
+    width: u32,
+    height: u32,
+    spp: u32,
+    samples: strata::partial::SampleSet,
+    count: u64,
+) -> strata::partial::file::Part {
+    use strata::partial::file::{Part, PartLook, Provenance};
+    Part {
+        provenance: Provenance {
+            strata_version: env!("CARGO_PKG_VERSION").into(),
+            device: "a test".into(),
+            scene: "fnv1a64:1".into(),
+            settings: "fnv1a64:2".into(),
+            seed: 0,
+        },
+        look: PartLook {
+            exposure: 0.0,
+            tone_map: strata::scene::settings::ToneMap::Clamp,
+            transparent: false,
+            auto_exposure: false,
+        },
+        sums: strata::partial::PartialSums {
+            width,
+            height,
+            spp,
+            samples,
+            counts: vec![count; width as usize * height as usize * 4],
+        },
+    }
+}
