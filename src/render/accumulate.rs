@@ -1,6 +1,6 @@
 //! The accumulation pass: per pixel, it reads the G-buffer (or, in the reference mode, traces the pixel's own
-//! primary ray), casts shadow, gloss and translucency rays against the TLAS, and adds the sample's radiance into
-//! the RGBA32F accumulation image. One shading body (`shaders/include/path_tracer.glsl`) traces in one of two
+//! primary ray), casts shadow, gloss and translucency rays against the TLAS, and adds the sample's radiance to
+//! the pixel's fixed-point sums. One shading body (`shaders/include/path_tracer.glsl`) traces in one of two
 //! ways ([`TracePath`]): with ray queries in a compute shader (`accumulate.comp`), whose workgroups take the
 //! image's 8×8 tiles from a queue (a counter per sample) so that threads that finish early take more
 //! ([`workgroups_for`]); or through a ray-tracing pipeline (`accumulate.rgen`, with hit shaders that only record

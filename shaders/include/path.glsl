@@ -1,0 +1,166 @@
+// The chain of a path after its visible vertex: where it goes on (GGX gloss and translucency, diffuse bounces
+// with --indirect, Russian roulette) and what each ray finds. Part of the accumulation pass's shading body
+// (path_tracer.glsl).
+#ifndef PATH_GLSL
+#define PATH_GLSL
+#include "direct_light.glsl"
+#include "surface.glsl"
+
+// The nearest non-geometry light along a ray, if nearer than t_max: its radiance, and in `density` the
+// solid-angle density with which light sampling would have chosen that direction.
+vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
+    vec3 result = vec3(0.0);
+    density = 0.0;
+    float nearest = t_max;
+    for (uint i = 0u; i < pc.analytic_light_count; i++) {
+        vec3 radiance;
+        GpuLight l = lights[pc.light_offset + i];
+        float t = intersect_light(l, o, d, nearest, radiance);
+        if (t > 0.0) {
+            nearest = t;
+            result = radiance;
+            density = l.cone.w * light_pdf(l, o, d, t);
+        }
+    }
+    return result;
+}
+
+// Where a path goes on from one vertex: the next ray and what it carries.
+struct ChainRay {
+    vec3 origin;
+    // Solid-angle density of a reflection (for MIS), 0 for a refraction, DIFFUSE_BOUNCE for a diffuse bounce.
+    float pdf;
+    vec3 dir;
+    uint pixel;
+    vec3 throughput;
+    uint lane;  // the invocation whose pixel it belongs to
+    vec2 cone;  // the ray cone: width at the origin, spread angle (pixel_cone)
+    // 1: the ray only gathers the light it reaches (lights and emitters, not the background) and the path
+    // ends at its hit: BSDF sampling's estimate of the direct light at the vertex it left (a path's last
+    // vertex, or the diffuse lobe without diffuse interreflection).
+    uint gather_only;
+};
+
+// A cosine-weighted direction about n (Malley's method: the concentric disk projected up onto the hemisphere).
+vec3 sample_cosine(vec3 n, vec2 u) {
+    vec2 d = concentric_disk(u);
+    vec3 t;
+    vec3 b;
+    make_basis(n, t, b);
+    return normalize(t * d.x + b * d.y + n * sqrt(max(0.0, 1.0 - dot(d, d))));
+}
+
+// The next direction of the path from vertex `depth`: with diffuse interreflection on, by the diffuse lobe
+// (cosine-weighted) with probability diffuse_probability; otherwise GGX around the mirror or refracted direction.
+// Then Russian roulette on weak paths (most of a dielectric's Fresnel reflection): unbiased, and cheap.
+// Survival is 4x the weight: weak reflections still end most paths, at a quarter of the variance.
+// Past the last vertex --bounces allows, BSDF sampling alone still casts one ray that only gathers light.
+bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
+    bool bsdf_only = pc.direct_light == DIRECT_BSDF_SAMPLING;
+    if (!room_to_bounce(depth) && !bsdf_only) return false;
+    r.gather_only = room_to_bounce(depth) ? 0u : 1u;
+    uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+    vec3 weight;
+    float u_lobe = sample1(r.pixel, dim + VERTEX_LOBE_CHOICE);
+    float p_diffuse = diffuse_probability(s.m);
+    if (u_lobe < p_diffuse) {
+        r.dir = sample_cosine(s.normal, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION));
+        float nl = dot(s.normal, r.dir);
+        if (nl <= 0.0 || dot(s.geometric, r.dir) <= 0.0) return false;
+        vec3 diffuse;
+        vec3 specular;
+        brdf_cos(s.m, s.normal, v, r.dir, diffuse, specular);
+        // f·cos / (p_diffuse · cos/π).
+        weight = diffuse * (PI / (nl * p_diffuse));
+        r.pdf = DIFFUSE_BOUNCE;
+        if (pc.indirect == 0u) r.gather_only = 1u;
+    } else {
+        // The rest of u_lobe chooses between reflection and refraction.
+        u_lobe = (u_lobe - p_diffuse) / (1.0 - p_diffuse);
+        if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION), u_lobe, r.dir, weight, r.pdf)) {
+            return false;
+        }
+        // A reflection below the face, as light sampling sees it (direct_light), reflects nothing.
+        if (r.pdf > 0.0 && dot(s.geometric, r.dir) <= 0.0) return false;
+        weight /= 1.0 - p_diffuse;
+        r.pdf *= 1.0 - p_diffuse;
+    }
+    r.throughput *= weight;
+    float survive = min(1.0, 4.0 * max(r.throughput.x, max(r.throughput.y, r.throughput.z)));
+    if (survive < 1.0) {
+        float u = unit_float(pcg_hash(sampling_key(pc.seed, r.pixel, dim + VERTEX_ROULETTE) ^ pcg_hash(pc.sample_index)));
+        if (u >= survive) return false;
+        r.throughput /= survive;
+    }
+    r.origin = offset_origin(s.position, s.geometric, r.dir);
+    return true;
+}
+
+// The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
+vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
+    if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
+    vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
+    r.throughput = vec3(1.0);
+    chain = next_chain_ray(s, v, 0u, r);
+    return radiance;
+}
+
+// The weight of light a chain ray reaches, which light sampling chooses with solid-angle density
+// `light_density` (0: never, as for a refraction, which light sampling never covers: the ray has it alone).
+// With MIS a reflection (pdf > 0) shares it by the power heuristic and a diffuse bounce leaves it to light
+// sampling, which took that lobe whole; light sampling alone leaves rays nothing it covers, BSDF sampling alone
+// gives them everything.
+float reached_light_weight(float pdf, float light_density) {
+    if (!(light_density > 0.0) || pdf == 0.0 || pc.direct_light == DIRECT_BSDF_SAMPLING) return 1.0;
+    if (pc.direct_light == DIRECT_LIGHT_SAMPLING || pdf == DIFFUSE_BOUNCE) return 0.0;
+    return power_heuristic(pdf, light_density);
+}
+
+// The light an escaping ray finds: the environment, a light like any other (MIS against light sampling; a
+// gather-only ray gathers it), or without one the background colour (not a light: gather-only rays skip it).
+vec3 escaped(ChainRay r) {
+    if (environment_present()) {
+        float density = lights[pc.light_offset].cone.w * environment_pdf(r.dir);
+        return environment_radiance(r.dir) * reached_light_weight(r.pdf, density);
+    }
+    return r.gather_only == 0u ? pc.background.rgb : vec3(0.0);
+}
+
+// The chain from vertex 1 on: each ray finds a light (MIS against light sampling; nothing for a diffuse
+// bounce), the background, or a surface whose emission and one light sample it adds before going on.
+vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
+    vec3 radiance = vec3(0.0);
+    for (uint depth = 1u; depth <= pc.max_depth; depth++) {
+        secondary_rays++;
+        log_ray(0u, r.origin, 0.0, r.dir, 1e30);
+        Hit h = trace_closest(r.origin, r.dir, 0.0, 1e30, r.cone);
+        bool hit = h.record != MISS;
+        float t_hit = hit ? h.t : 1e30;
+        float light_density;
+        vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
+        if (light != vec3(0.0)) {
+            radiance += r.throughput * light * reached_light_weight(r.pdf, light_density);
+            break;
+        }
+        if (!hit) {
+            radiance += r.throughput * escaped(r);
+            break;
+        }
+        vec3 v = -r.dir;
+        r.cone.x += r.cone.y * t_hit;
+        Surface s = hit_surface(h, v, r.cone.x, false);
+        float density = 0.0;
+        float cos_light = abs(dot(s.geometric, r.dir));
+        if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {
+            density = s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power);
+        }
+        radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
+        if (r.gather_only != 0u) break;
+        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+        radiance += r.throughput * direct_light(s, v, r.pixel, dim, room_to_bounce(depth), shadow_rays);
+        if (!next_chain_ray(s, v, depth, r)) break;
+    }
+    return radiance;
+}
+
+#endif

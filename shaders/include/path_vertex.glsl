@@ -1,0 +1,50 @@
+// What every vertex of a path uses: its sampler dimensions, the Surface it shades, and its shadow rays. Part of
+// the accumulation pass's shading body (path_tracer.glsl).
+#ifndef PATH_VERTEX_GLSL
+#define PATH_VERTEX_GLSL
+#include "ray_log.glsl"
+
+// Sampler dimensions (docs/architecture.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
+// host for the whole image, except pixel and lens in the reference mode (per pixel, here).
+const uint DIM_PIXEL = 0u;
+const uint DIM_LENS = 2u;
+const uint DIM_FIRST_VERTEX = 3u;
+// Each vertex of a path draws from its own five, from DIM_FIRST_VERTEX + DIMS_PER_VERTEX · depth on:
+const uint VERTEX_LIGHT_PICK = 0u;       // which light (by power)
+const uint VERTEX_LIGHT_POINT = 1u;      // where on it (2D)
+const uint VERTEX_ROULETTE = 2u;         // whether a weak path goes on (Russian roulette)
+const uint VERTEX_LOBE_CHOICE = 3u;      // diffuse or specular lobe, reflection or refraction
+const uint VERTEX_LOBE_DIRECTION = 4u;   // the direction within the lobe (2D)
+const uint DIMS_PER_VERTEX = 5u;
+
+struct Surface {
+    float emitter_density;  // π · luminance · sides of an emitter that light sampling covers, else 0
+    vec3 position;
+    vec3 normal;     // shading normal, on the side of the incoming ray
+    vec3 geometric;  // face normal, same side
+    vec3 emission;
+    bool inside;     // the incoming ray travels inside the material
+    Shading m;
+};
+
+vec2 sample2(uint pixel, uint dim) {
+    return sample_2d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+}
+
+float sample1(uint pixel, uint dim) {
+    return sample_1d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+}
+
+// A ray origin just off the surface on the side the ray leaves towards (scaled to the position's magnitude).
+vec3 offset_origin(vec3 p, vec3 ng, vec3 dir) {
+    float eps = 1e-4 * (1.0 + max(max(abs(p.x), abs(p.y)), abs(p.z)));
+    return p + ng * (dot(ng, dir) >= 0.0 ? eps : -eps);
+}
+
+bool occluded(vec3 o, vec3 d, float t_max) {
+    if (t_max <= 0.0 || (pc.sabotage & SABOTAGE_NO_SHADOW_RAYS) != 0u) return false;
+    log_ray(gl_RayFlagsTerminateOnFirstHitEXT, o, 0.0, d, t_max);
+    return trace_occluded(o, d, t_max);
+}
+
+#endif

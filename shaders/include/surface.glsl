@@ -1,0 +1,107 @@
+// What a ray finds: the background where it escapes, or a surface, its normals turned to the viewer, its
+// material evaluated and its emission. Part of the accumulation pass's shading body (path_tracer.glsl).
+#ifndef SURFACE_GLSL
+#define SURFACE_GLSL
+#include "path_vertex.glsl"
+
+// What a pixel shows where no surface is, along its primary ray's direction: the background colour, the
+// environment, or nothing (a transparent background: alpha 0 and no radiance).
+vec3 background_seen(vec3 dir) {
+    if (pc.background.w == float(BACKGROUND_ENVIRONMENT) && environment_present()) return environment_radiance(dir);
+    if (pc.background.w == float(BACKGROUND_TRANSPARENT)) return vec3(0.0);
+    return pc.background.rgb;
+}
+
+// Turns the normals to the side the ray arrives from; arriving from behind means travelling inside. Then the
+// one rule of emission, for every way a surface is seen (the G-buffer's visible surface, primary rays, gloss,
+// translucency and diffuse rays): a surface emits towards a side only where light sampling could choose it
+// (render/lights.rs), so a one-sided emitter is dark from behind, and light sampling and BSDF sampling agree
+// on where light comes from. `emitter_density` is π · luminance · sides of the emissive factor on an emitting
+// side (the density behind the lights' selection by power), else 0.
+void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
+    s.inside = dot(s.geometric, v) < 0.0;
+    if (s.inside) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
+    }
+    bool emits = m.double_sided != 0 || !s.inside;
+    if (!emits) s.emission = vec3(0.0);
+    float factor = luminance(m.emissive.rgb);
+    s.emitter_density = emits && factor > 0.0 ? PI * factor * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
+}
+
+Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
+    Surface s;
+    vec4 pos = texelFetch(gbuffer[GBUFFER_POSITION], p, 0);
+    vec4 mat = texelFetch(gbuffer[GBUFFER_MATERIAL], p, 0);
+    s.position = pos.xyz;
+    s.normal = normalize(texelFetch(gbuffer[GBUFFER_SHADING_NORMAL], p, 0).xyz);
+    vec4 geometric = texelFetch(gbuffer[GBUFFER_GEOMETRIC_NORMAL], p, 0);
+    s.geometric = normalize(geometric.xyz);
+    s.emission = texelFetch(gbuffer[GBUFFER_EMISSION], p, 0).rgb;
+    s.m.albedo = texelFetch(gbuffer[GBUFFER_ALBEDO], p, 0).rgb;
+    s.m.metallic = mat.x;
+    s.m.roughness = mat.y;
+    s.m.transmission = mat.z;
+    s.m.ior = unpack_ior(mat.w);
+    s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
+    s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[GBUFFER_SPECULAR_COLOR], p, 0).rgb;
+    face_viewer(s, v, materials[material]);
+    return s;
+}
+
+// The surface a ray hit, from the primitive's vertex streams, its material evaluated by the one evaluation the
+// G-buffer pass uses too (material.glsl), so a surface looks the same seen directly, in a mirror or through glass. `visible` (a primary ray of the reference mode) also turns double-sided faces to the
+// viewer, as the raster pass does; deeper hits keep their side, so a ray inside a double-sided transmissive mesh
+// still knows it is inside.
+Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
+    TriangleHit h = triangle_hit(hit.record, hit.primitive, hit.barycentrics);
+    mat4x3 world_from_object = hit.world_from_object;
+    Vec3Array positions = Vec3Array(h.r.positions);
+    vec3 p0 = positions.v[h.i0];
+    vec3 p1 = positions.v[h.i1];
+    vec3 p2 = positions.v[h.i2];
+    Vec3Array normals = Vec3Array(h.r.normals);
+    vec3 n_object = h.w.x * normals.v[h.i0] + h.w.y * normals.v[h.i1] + h.w.z * normals.v[h.i2];
+    vec3 uv_area = hit_uv_and_area(h.r.uvs, h);
+    vec2 uv = uv_area.xy;
+
+    mat3 m3 = mat3(world_from_object);
+    // Normals transform by the cofactor matrix (det · inverse transpose); the sign keeps mirrored instances right.
+    mat3 cofactor = mat3(cross(m3[1], m3[2]), cross(m3[2], m3[0]), cross(m3[0], m3[1]));
+    float det_sign = dot(m3[0], cross(m3[1], m3[2])) < 0.0 ? -1.0 : 1.0;
+    Surface s;
+    s.position = world_from_object * vec4(h.w.x * p0 + h.w.y * p1 + h.w.z * p2, 1.0);
+    vec3 ng = det_sign * (cofactor * cross(p1 - p0, p2 - p0));  // ±(M·e1) × (M·e2): footprint_lod's world_edges
+    s.geometric = normalize(ng);
+    vec3 ns = det_sign * (cofactor * n_object);
+    s.normal = dot(ns, ns) > 0.0 ? normalize(ns) : s.geometric;
+    if (dot(s.normal, s.geometric) < 0.0) s.geometric = -s.geometric;
+
+    GpuMaterial m = materials[h.r.material];
+    vec3 uv1_area = any_texture_reads_uv1(m) ? hit_uv_and_area(h.r.uvs1, h) : uv_area;
+    // The cone's footprint in each UV set; texture_lod adds each texture's own density.
+    vec2 lod = vec2(footprint_lod(cone_width, ng, v, uv_area.z), footprint_lod(cone_width, ng, v, uv1_area.z));
+    vec3 dpdu = vec3(0.0);
+    vec3 dpdv = vec3(0.0);
+    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE) {
+        // Tangent vectors transform with the object matrix (gbuffer.vert).
+        Vec3Array dpdus = Vec3Array(h.r.dpdu);
+        Vec3Array dpdvs = Vec3Array(h.r.dpdv);
+        dpdu = m3 * (h.w.x * dpdus.v[h.i0] + h.w.y * dpdus.v[h.i1] + h.w.z * dpdus.v[h.i2]);
+        dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
+    }
+    MaterialPoint mp = evaluate_material(m, hit_color(h), uv, uv1_area.xy, s.normal, dpdu, dpdv, lod, false);
+    s.normal = mp.normal;
+    // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
+    if (visible && m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
+        s.normal = -s.normal;
+        s.geometric = -s.geometric;
+    }
+    s.emission = mp.emission;
+    s.m = mp.shading;
+    face_viewer(s, v, m);
+    return s;
+}
+
+#endif
