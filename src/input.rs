@@ -165,13 +165,7 @@ pub fn excerpt(text: &str, keep: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn scratch(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("strata-input-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::scratch_dir as scratch;
 
     #[test]
     fn what_is_not_a_regular_file_is_named() {

@@ -162,3 +162,12 @@ pub fn part_provenance(
         seed: settings.seed,
     })
 }
+
+/// An empty directory of a unit test's own under the system's temporary directory (each test names its own).
+#[cfg(test)]
+pub(crate) fn scratch_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("strata-unit-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

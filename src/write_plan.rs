@@ -212,13 +212,7 @@ fn collision(a: &Entry, b: &Entry) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn scratch(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!("strata-plan-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
-    }
+    use crate::scratch_dir as scratch;
 
     fn never(_: &str, _: &str) -> bool {
         false

@@ -240,6 +240,7 @@ fn read_checked_part(path: &Path, file: std::fs::File, header: &exr::meta::heade
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+    pub(crate) use crate::scratch_dir as scratch;
 
     pub(crate) fn part(samples: (u32, u32), seed: u64) -> Part {
         let (width, height, spp) = (3, 2, 8);
@@ -255,14 +256,6 @@ pub(crate) mod tests {
             look: PartLook { exposure: 0.3, tone_map: ToneMap::Filmic, transparent: false, auto_exposure: true },
             sums: PartialSums { width, height, spp, samples: SampleSet::range(samples.0, samples.1), counts },
         }
-    }
-
-    /// An empty directory of this test's own.
-    pub(crate) fn scratch(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("strata-partial-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
     }
 
     #[test]
