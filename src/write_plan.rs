@@ -54,9 +54,7 @@ impl WritePlan {
     /// A file the run writes: its directory must exist and take new files, and nothing but a regular file may
     /// be in its place.
     pub fn writes(&mut self, role: &str, path: &Path) -> Result<()> {
-        self.check_destination(role, path)?;
-        self.push(role, path, Use::Writes);
-        Ok(())
+        self.destination(role, path, Use::Writes)
     }
 
     /// A file the run reads and must not change (an input: a part, `--resume`, an environment).
@@ -66,14 +64,19 @@ impl WritePlan {
 
     /// A file the run writes as it goes and removes at the end (a checkpoint), checked as a destination.
     pub fn writes_then_removes(&mut self, role: &str, path: &Path) -> Result<()> {
-        self.check_destination(role, path)?;
-        self.push(role, path, Use::Consumes);
-        Ok(())
+        self.destination(role, path, Use::Consumes)
     }
 
     /// A file the run reads and then removes (`strata merge --remove-parts`).
     pub fn reads_then_removes(&mut self, role: &str, path: &Path) {
         self.push(role, path, Use::Consumes);
+    }
+
+    /// A file the run writes: checked as a destination, then planned.
+    fn destination(&mut self, role: &str, path: &Path, usage: Use) -> Result<()> {
+        self.check_destination(role, path)?;
+        self.push(role, path, usage);
+        Ok(())
     }
 
     fn push(&mut self, role: &str, path: &Path, usage: Use) {

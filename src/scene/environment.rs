@@ -100,14 +100,20 @@ impl Environment {
     /// for its texels asked for, before any texel is decoded.
     pub fn load(path: &Path) -> Result<Self> {
         let name = path.display().to_string();
-        // What is there first: /dev/zero is a device before it is a name without an extension.
-        crate::input::open_regular(path)?;
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        // Each loader opens only a regular file; elsewhere what is there is said first (/dev/zero is a device
+        // before it is a name without an extension).
         let (width, height, texels) = match ext.as_deref() {
             Some("hdr") => load_hdr(path)?,
             Some("exr") => load_exr(path)?,
-            Some(other) => bail!("{name}: unknown environment extension \".{other}\" (use .hdr or .exr)"),
-            None => bail!("{name}: environment file has no extension (use .hdr or .exr)"),
+            Some(other) => {
+                crate::input::open_regular(path)?;
+                bail!("{name}: unknown environment extension \".{other}\" (use .hdr or .exr)")
+            }
+            None => {
+                crate::input::open_regular(path)?;
+                bail!("{name}: environment file has no extension (use .hdr or .exr)")
+            }
         };
         Self::new(&name, width, height, texels)
     }

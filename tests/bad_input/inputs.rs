@@ -62,6 +62,15 @@ fn claim_one_tile(path: &Path, width: i32, height: i32) {
     std::fs::write(path, bytes).unwrap();
 }
 
+/// Makes a small EXR claim `width × height`: as one tile where its name says "tile", else in scanlines.
+fn claim(path: &Path, width: i32, height: i32) {
+    if path.to_string_lossy().contains("tile") {
+        claim_one_tile(path, width, height);
+    } else {
+        claim_size(path, width, height);
+    }
+}
+
 /// `command` with at most 2 GiB of address space (RLIMIT_AS): an allocation of a header's claim fails as it
 /// would on a small machine, and must be an error, not an abort.
 fn with_memory_limit(mut cmd: std::process::Command) -> std::process::Command {
@@ -101,11 +110,7 @@ fn huge_claims_in_headers_are_refused_before_any_allocation() {
     ];
     for (name, w, h) in parts {
         write_part(&d(name), &small).unwrap();
-        if name.contains("tile") {
-            claim_one_tile(&d(name), w, h);
-        } else {
-            claim_size(&d(name), w, h);
-        }
+        claim(&d(name), w, h);
     }
     let tiny = strata::output::Frame::new(1, 1, vec![[1.0, 1.0, 1.0, 1.0]]).unwrap();
     let environments = [
@@ -117,11 +122,7 @@ fn huge_claims_in_headers_are_refused_before_any_allocation() {
     ];
     for (name, w, h) in environments {
         strata::output::write_frame(&d(name), &tiny).unwrap();
-        if name.contains("tile") {
-            claim_one_tile(&d(name), w, h);
-        } else {
-            claim_size(&d(name), w, h);
-        }
+        claim(&d(name), w, h);
     }
     hdr_with(&d("env-in-limit.hdr"), 16_384, 8_192, &[2, 2, 64, 0, 1, 1, 1, 1]);
     hdr_with(&d("env-16385.hdr"), 16_385, 16_385, &[]);
