@@ -139,9 +139,9 @@ def write_gltf(path):
         json.dump(doc, f)
 
 
-def mitsuba_render(size, spp, max_depth):
+def mitsuba_scene_dict(size, spp, integrator, sampler="independent"):
+    """The box as a Mitsuba 3 scene dictionary (a variant must be set)."""
     import mitsuba as mi
-    mi.set_variant("scalar_rgb")
     T = mi.ScalarTransform4f
 
     def rect(centre, normal, size, bsdf, emitter=None):
@@ -165,12 +165,12 @@ def mitsuba_render(size, spp, max_depth):
     def diffuse(albedo):
         return {"type": "diffuse", "reflectance": {"type": "rgb", "value": list(albedo)}}
 
-    scene = {"type": "scene", "integrator": {"type": "path", "max_depth": max_depth},
+    scene = {"type": "scene", "integrator": integrator,
              "sensor": {"type": "perspective", "fov": CAMERA["yfov_degrees"], "fov_axis": "y",
                         "to_world": T().look_at(origin=list(CAMERA["origin"]), target=list(CAMERA["target"]),
                                                 up=[0, 1, 0]),
                         "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"}},
-                        "sampler": {"type": "independent", "sample_count": spp}}}
+                        "sampler": {"type": sampler, "sample_count": spp}}}
     for name, centre, normal, albedo in WALLS:
         scene[name.replace(" ", "_")] = rect(centre, normal, 2.0, diffuse(albedo))
     scene["light"] = rect(LIGHT["centre"], (0, -1, 0), LIGHT["size"], diffuse((0, 0, 0)),
@@ -179,19 +179,29 @@ def mitsuba_render(size, spp, max_depth):
         scene[name.replace(" ", "_")] = {
             "type": "cube", "bsdf": diffuse((0.73, 0.73, 0.73)),
             "to_world": T().translate(list(centre)) @ T().rotate([0, 1, 0], math.degrees(angle)) @ T().scale(list(half))}
-    image = mi.render(mi.load_dict(scene))
+    return scene
+
+
+def mitsuba_render(size, spp, max_depth):
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    image = mi.render(mi.load_dict(mitsuba_scene_dict(size, spp, {"type": "path", "max_depth": max_depth})))
     return np.array(image)[..., :3].astype(np.float64)
+
+
+def read_exr_rgb(path):
+    import OpenEXR
+    with OpenEXR.File(path) as f:
+        ch = f.channels()
+        a = ch["RGBA"].pixels if "RGBA" in ch else np.stack([ch[k].pixels for k in "RGB"], -1)
+    return a[..., :3].astype(np.float64)
 
 
 def strata_render(strata, gltf, size, spp, bounces, out):
     subprocess.run([strata, "render", gltf, "--size", f"{size}x{size}", "--spp", str(spp),
                     "--sampler", "random", "--primary", "rays", "--indirect", "--bounces", str(bounces),
                     "--background", "0,0,0", "-o", out, "--quiet"], check=True)
-    import OpenEXR
-    with OpenEXR.File(out) as f:
-        ch = f.channels()
-        a = ch["RGBA"].pixels if "RGBA" in ch else np.stack([ch[k].pixels for k in "RGB"], -1)
-    return a[..., :3].astype(np.float64)
+    return read_exr_rgb(out)
 
 
 def bands(image, n=8):

@@ -10,6 +10,7 @@ const float LIGHT_DISK = 4.0;
 const float LIGHT_SPHERE = 5.0;
 const float LIGHT_TRIANGLE = 6.0;
 const float LIGHT_ENVIRONMENT = 7.0;  // the environment (environment.glsl), first of a sample's lights when present
+const float LIGHT_PARALLELOGRAM = 8.0;  // two emissive triangles making a quad, sampled whole (render/lights.rs)
 
 struct GpuLight {
     vec4 position_kind;  // xyz centre or first vertex, w kind

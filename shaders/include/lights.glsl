@@ -119,8 +119,11 @@ LightSample sample_light(GpuLight l, vec3 x, vec2 u) {
             disk = r * vec2(cos(theta), sin(theta));
         }
         y = c + disk.x * l.axis_u.xyz + disk.y * l.axis_v.xyz;
+    } else if (kind == LIGHT_PARALLELOGRAM) {
+        y = c + u.x * l.axis_u.xyz + u.y * l.axis_v.xyz;
     } else {
-        // Triangle: uniform barycentrics (Osada et al. 2002).
+        // Triangle: uniform barycentrics by Heitz's low-distortion map ("A Low-Distortion Map Between Triangle and
+        // Square", 2019), which keeps a stratified sample's strata compact on the triangle.
         float su = sqrt(u.x);
         s.bary = vec2(su * (1.0 - u.y), su * u.y);
         y = c + s.bary.x * l.axis_u.xyz + s.bary.y * l.axis_v.xyz;

@@ -9,13 +9,12 @@
 const uint DIM_PIXEL = 0u;
 const uint DIM_LENS = 2u;
 const uint DIM_FIRST_VERTEX = 3u;
-// Each vertex of a path draws from its own five, from DIM_FIRST_VERTEX + DIMS_PER_VERTEX · depth on:
-const uint VERTEX_LIGHT_PICK = 0u;       // which light (by power)
-const uint VERTEX_LIGHT_POINT = 1u;      // where on it (2D)
-const uint VERTEX_ROULETTE = 2u;         // whether a weak path goes on (Russian roulette)
-const uint VERTEX_LOBE_CHOICE = 3u;      // diffuse or specular lobe, reflection or refraction
-const uint VERTEX_LOBE_DIRECTION = 4u;   // the direction within the lobe (2D)
-const uint DIMS_PER_VERTEX = 5u;
+// Each vertex of a path draws from its own four, from DIM_FIRST_VERTEX + DIMS_PER_VERTEX · depth on:
+const uint VERTEX_LIGHT = 0u;            // which light (by power) and where on it (2D; direct_light.glsl)
+const uint VERTEX_ROULETTE = 1u;         // whether a weak path goes on (Russian roulette)
+const uint VERTEX_LOBE_CHOICE = 2u;      // diffuse or specular lobe, reflection or refraction
+const uint VERTEX_LOBE_DIRECTION = 3u;   // the direction within the lobe (2D)
+const uint DIMS_PER_VERTEX = 4u;
 
 struct Surface {
     float emitter_density;  // π · luminance · sides of an emitter that light sampling covers, else 0

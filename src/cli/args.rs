@@ -133,7 +133,7 @@ pub struct RenderArgs {
     pub spp: Option<u32>,
     /// How sample points are placed: regular (strata centres; aliases), random, jittered (one random point in
     /// each of n x n strata, Cook 1984), multi-jittered (Kensler 2013; also stratified in x and in y), sobol
-    /// (Owen-scrambled Sobol, Burley 2020; best at powers of two) [default: the scene file's, else jittered].
+    /// (Owen-scrambled Sobol, Burley 2020; best at powers of two) [default: the scene file's, else multi-jittered].
     #[arg(long, value_name = "NAME", value_parser = parse_sampler)]
     pub sampler: Option<strata::scene::settings::SamplerKind>,
     /// Seed of every random choice; the same scene, options and seed give the same bits on the same device

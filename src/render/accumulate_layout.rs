@@ -13,6 +13,9 @@ pub mod light_kind {
     pub const TRIANGLE: f32 = 6.0;
     /// The environment: the first of a sample's lights when the scene has one.
     pub const ENVIRONMENT: f32 = 7.0;
+    /// Two emissive triangles that make a parallelogram with a plain emissive factor (lights::merge_parallelograms),
+    /// sampled as one: corner + s·axis_u + t·axis_v for s, t in [0, 1].
+    pub const PARALLELOGRAM: f32 = 8.0;
 }
 
 /// One light at one sample time, in world space. Area lights carry radiance, point and spot lights intensity,

@@ -180,7 +180,7 @@ impl Default for RenderSettings {
             width: 960,
             height: 540,
             spp: 16,
-            sampler: SamplerKind::Jittered,
+            sampler: SamplerKind::MultiJittered,
             seed: 0,
             background: Vec3::new(0.02, 0.02, 0.025),
             backdrop: None,
