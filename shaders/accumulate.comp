@@ -38,7 +38,12 @@ void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secon
     ChainRay r;
     if (in_image) {
         value = shade_primary(pixel, lane, r, chain, shadow_rays);
-        if (chain) group_chains[atomicAdd(group_chain_count, 1u)] = r;
+        if (CHAINS != 0u && chain) group_chains[atomicAdd(group_chain_count, 1u)] = r;
+    }
+    if (CHAINS == 0u) {
+        // Nothing to pack: no barriers (uniform: a specialization constant).
+        if (in_image) accumulate_sample(pixel, value);
+        return;
     }
     memoryBarrierShared();
     barrier();

@@ -221,6 +221,7 @@ pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TraceP
         primary_rays: false,
         alpha_tested: true,
         environment: false,
+        chains: true,
         launch: AccumulateLaunch::DeviceDefault,
         table_shift: 0,
     };

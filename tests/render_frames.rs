@@ -490,6 +490,31 @@ fn the_picture_does_not_depend_on_how_the_work_is_spread_over_invocations() {
     gpu.finish().unwrap();
 }
 
+/// Direct light alone (`--bounces 0`) builds the accumulation pipeline without the chain code no path reaches
+/// (CHAINS, accumulate_bindings.glsl): the same bits and rays as the pipeline that holds it, both ways to trace.
+#[test]
+fn leaving_out_chain_code_no_path_reaches_changes_no_bit() {
+    use strata::render::frame::{render_frame, FrameOptions};
+    let gpu = GpuTest::new();
+    let scene = load(&repo("scenes/showcase.toml"));
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
+    for path in strata::render::accumulate::TracePath::available(gpu.device()) {
+        let s =
+            RenderSettings { bounces: 0, trace: path.as_trace(), ..settings(40, 24, 2, SamplerKind::MultiJittered) };
+        let frame = |keep_chain_code: bool| {
+            let options = FrameOptions { keep_chain_code, ..Default::default() };
+            render_frame(gpu.device(), &scene, &on_gpu, &s, &options, &mut |_, _| true).unwrap()
+        };
+        let (without, with) = (frame(false), frame(true));
+        assert!(without.stats.shadow_rays > 300, "{path:?}: too few shadow rays to compare");
+        assert_eq!(without.stats.secondary_rays, 0, "{path:?}: a path went on at --bounces 0");
+        assert!(without.linear == with.linear, "{path:?}: leaving out the chain code changed the picture");
+        assert_eq!(without.stats.shadow_rays, with.stats.shadow_rays, "{path:?}: other shadow rays");
+    }
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
 /// Soft shadows, depth of field and motion blur without glossy paths: a Lambertian floor and boxes (one
 /// sliding) under a quad light, seen through a lens focused between them.
 fn effects_scene() -> Scene {

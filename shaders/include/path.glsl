@@ -101,7 +101,7 @@ vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout ui
     if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
     vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
     r.throughput = vec3(1.0);
-    chain = next_chain_ray(s, v, 0u, r);
+    chain = CHAINS != 0u && next_chain_ray(s, v, 0u, r);
     return radiance;
 }
 

@@ -142,6 +142,14 @@ pub enum AccumulateLaunch {
     OnePerTileOrPixel,
 }
 
+/// Whether any path can go on past its visible surface: with `max_depth` path vertices (the visible surface and
+/// its bounces) only when there is a second, or when BSDF sampling alone (`bsdf_sampling_alone`) casts its
+/// gather ray past the last (path.glsl, next_chain_ray). Exact, so a pipeline without chain code draws the same
+/// picture.
+pub fn paths_go_on(max_depth: u32, bsdf_sampling_alone: bool) -> bool {
+    max_depth > 1 || bsdf_sampling_alone
+}
+
 /// Which accumulation pipeline a pass builds.
 #[derive(Debug, Clone, Copy)]
 pub struct AccumulateVariant {
@@ -153,6 +161,9 @@ pub struct AccumulateVariant {
     pub alpha_tested: bool,
     /// The scene has an environment; without one the pipeline holds none of its code (HAS_ENVIRONMENT).
     pub environment: bool,
+    /// Paths may go on past the visible surface ([`paths_go_on`]); without it the pipeline holds no chain code
+    /// (CHAINS).
+    pub chains: bool,
     pub launch: AccumulateLaunch,
     /// Bytes to move the shader binding table off its alignment (0 but in the test that breaks it on purpose).
     pub table_shift: u64,
@@ -160,8 +171,8 @@ pub struct AccumulateVariant {
 
 impl AccumulatePass {
     pub fn new(device: &Arc<Device>, variant: &AccumulateVariant) -> Result<Self> {
-        let AccumulateVariant { path, primary_rays, alpha_tested, environment, launch, table_shift } = *variant;
-        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3.
+        let AccumulateVariant { path, primary_rays, alpha_tested, environment, chains, launch, table_shift } = *variant;
+        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4.
         let flag = u32::from;
         let bindings = Self::bindings(device.texture_array_size());
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
@@ -179,7 +190,7 @@ impl AccumulatePass {
                 ("accumulate.comp", shaders::ACCUMULATE_COMP),
                 &bindings,
                 push_constant_size,
-                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment)],
+                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment), flag(chains)],
             )?),
             TracePath::Pipeline => {
                 let runs = if pixel_runs { ", pixel runs" } else { "" };
@@ -193,7 +204,13 @@ impl AccumulatePass {
                         any_hit: alpha_tested.then_some(("accumulate.rahit", shaders::ACCUMULATE_RAHIT)),
                         bindings: &bindings,
                         push_constant_size,
-                        constants: &[flag(primary_rays), flag(alpha_tested), flag(pixel_runs), flag(environment)],
+                        constants: &[
+                            flag(primary_rays),
+                            flag(alpha_tested),
+                            flag(pixel_runs),
+                            flag(environment),
+                            flag(chains),
+                        ],
                     },
                 )?;
                 let table = Box::new(ShaderBindingTable::new(device, &pipeline, table_shift)?);

@@ -86,6 +86,9 @@ pub struct FrameOptions {
     /// shows the validation layer catches a misaligned table. 0 in every render.
     #[doc(hidden)]
     pub misalign_shader_binding_table: u64,
+    /// Build the accumulation pipeline with its chain code even where no path can go on: only for the test that
+    /// shows leaving it out changes no bit (`accumulate::paths_go_on`).
+    pub keep_chain_code: bool,
 }
 
 /// Deliberate breakage of the accumulation pass, for `strata check`'s canaries: proof that its comparisons can
@@ -348,6 +351,8 @@ pub fn render_samples(
     let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
     // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
     let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
+    // Path vertices: the visible surface and its bounces.
+    let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
     let accumulate = AccumulatePass::new(
         device,
         &AccumulateVariant {
@@ -355,6 +360,8 @@ pub fn render_samples(
             primary_rays: traced,
             alpha_tested: ray_scene.alpha_tested,
             environment: scene.environment.is_some(),
+            chains: options.keep_chain_code
+                || super::accumulate::paths_go_on(max_depth, options.direct_light == DirectLight::BsdfSampling),
             launch: options.accumulate_launch,
             table_shift: options.misalign_shader_binding_table,
         },
@@ -372,8 +379,6 @@ pub fn render_samples(
         environment: &on_gpu.environment,
     })?;
     // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
-    // Path vertices: the visible surface and its bounces.
-    let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
     // BSDF sampling alone casts one more ray past the last vertex.
     let rays_per_pixel = 2 * u64::from(max_depth) + 1;
     let ray_log = if options.log_rays {
