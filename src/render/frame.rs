@@ -2,34 +2,22 @@
 //! lens point from the sampler), the instances and lights at that time, a TLAS rebuild, the G-buffer pass and
 //! the accumulation pass; then the resolve pass. Samples go to the GPU in batches that share one submission;
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
-use super::accumulate::{
-    counter_bytes, AccumulateInputs, AccumulateLaunch, AccumulatePass, AccumulateVariant, TracePath,
-};
-use super::accumulate_layout::{
-    AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT, COUNTER_SECONDARY_RAYS, COUNTER_SHADOW_RAYS,
-};
+use super::accumulate::{AccumulateInputs, AccumulateLaunch, AccumulatePass, AccumulateVariant, TracePath};
+use super::accumulate_layout::AccumulatePush;
 use super::gbuffer::{GBuffer, GBufferPass};
-use super::lights::LightSet;
 use super::resolve::ResolvePass;
+pub use super::sample_slots::{camera_sample_at, gpu_camera, seed32};
+use super::sample_slots::{SampleRecord, SampleSlots};
 use super::SceneOnGpu;
-use crate::math::lens::{camera_sample, CameraSample};
-use crate::math::sampling::{sample_1d, sample_2d};
 use crate::output::Frame;
 use crate::scene::settings::{Backdrop, Primary, RenderSettings, SamplerKind};
-use crate::scene::{Projection, Scene};
-use crate::vk::accel::DynamicTlas;
-use crate::vk::commands::{buffer_barrier, image_barrier, memory_barrier, submit_and_wait, Access};
+use crate::scene::Scene;
+use crate::vk::commands::{buffer_barrier, memory_barrier, submit_and_wait, Access};
 use crate::vk::timer::TimestampPool;
 use crate::vk::{Buffer, Device, Image, MemoryLocation};
 use anyhow::{bail, Result};
 use ash::vk;
-use glam::{Vec2, Vec3, Vec4};
 use std::sync::Arc;
-
-/// Sampler dimensions the host draws once per sample for the whole image (docs/architecture.md's order).
-const DIM_PIXEL: u32 = 0;
-const DIM_TIME: u32 = 1;
-const DIM_LENS: u32 = 2;
 
 /// How the accumulation pass estimates the light that reaches a path vertex straight from the lights and
 /// emitters. All three converge to the same picture (the tests hold them to it); they differ in noise.
@@ -173,48 +161,6 @@ impl std::fmt::Display for Interrupted {
 
 impl std::error::Error for Interrupted {}
 
-/// The 32-bit seed the shaders hash from the 64-bit setting.
-pub fn seed32(seed: u64) -> u32 {
-    (seed ^ (seed >> 32)) as u32
-}
-
-/// Sample `index` of `count`'s shutter time, lens point and camera matrices (the same for every pixel).
-pub fn camera_sample_at(
-    scene: &Scene,
-    settings: &RenderSettings,
-    index: u32,
-) -> (f32, CameraSample, crate::scene::Camera) {
-    let (kind, seed, count) = (settings.sampler, seed32(settings.seed), settings.spp);
-    let jitter = sample_2d(kind, seed, 0, index, count, DIM_PIXEL) - Vec2::splat(0.5);
-    let (open, close) = scene.shutter;
-    // A closed shutter interval is the still frame exactly.
-    let t = if close > open { open + (close - open) * sample_1d(kind, seed, 0, index, count, DIM_TIME) } else { open };
-    let lens = sample_2d(kind, seed, 0, index, count, DIM_LENS);
-    let camera = scene.camera_at(t);
-    let sample = camera_sample(&camera, settings.width, settings.height, lens, jitter);
-    (t, sample, camera)
-}
-
-/// The camera the reference mode's primary rays start from (`camera_ray` in accumulate.comp).
-pub fn gpu_camera(camera: &crate::scene::Camera, width: u32, height: u32) -> GpuCamera {
-    let m = camera.world_from_camera;
-    // Half the image's extent, read off the raster pass's own projection (x_c = x / half_x, y_c = -y / half_y
-    // on the plane at distance 1, or in metres orthographically), so both modes frame the image alike.
-    let clip_from_view = camera.clip_from_view(width as f32 / height as f32);
-    let half = Vec2::new(1.0 / clip_from_view.x_axis.x, -1.0 / clip_from_view.y_axis.y);
-    let (orthographic, near, far) = match camera.projection {
-        Projection::Perspective { znear, zfar, .. } => (false, znear, zfar.unwrap_or(f32::MAX)),
-        Projection::Orthographic { znear, zfar, .. } => (true, znear, zfar),
-    };
-    let (aperture, focus) =
-        if orthographic { (0.0, 1.0) } else { (camera.lens.aperture_radius, camera.lens.focus_distance) };
-    GpuCamera {
-        world_from_camera: [m.x_axis, m.y_axis, m.z_axis, m.w_axis],
-        lens: Vec4::new(half.x, half.y, aperture, focus),
-        range: Vec4::new(near, far, if orthographic { 1.0 } else { 0.0 }, 0.0),
-    }
-}
-
 /// Samples per submission: enough to keep the host out of the way, few enough for a lively progress bar.
 fn batch_size(pixels: u64, spp: u32) -> u32 {
     ((1u64 << 20) / pixels.max(1)).clamp(1, 8).min(u64::from(spp)) as u32
@@ -276,24 +222,10 @@ pub fn render_samples(
 ) -> Result<RenderedFrame> {
     let Continuation { resume, mut checkpoint } = continuation;
     let (width, height, spp) = (settings.width, settings.height, settings.spp);
-    if width == 0 || height == 0 || spp == 0 {
-        bail!("nothing to render: {width}x{height} pixels, {spp} samples per pixel");
-    }
-    let (range_start, range_end) = options.samples.unwrap_or((0, spp));
-    // An empty range is what a render resumed from a checkpoint that holds all of its samples has left.
-    if range_start > range_end || range_end > spp || (range_start == range_end && resume.is_none()) {
-        bail!("samples {range_start}..{range_end} are not a range within the frame's {spp}");
-    }
-    if let Some(r) = resume {
-        r.check_fits(width, height, spp)?;
-        if let Some((a, b)) = r.samples.overlap(&crate::partial::SampleSet::range(range_start, range_end)) {
-            bail!("the sums to go on from hold samples {a}..{b} already");
-        }
-    }
+    let (range_start, range_end) = sample_range(settings, options, resume)?;
     // The samples the sums hold when this run ends, and what the resolve divides them by.
     let held = resume.map_or(0, |r| r.samples.len()) + (range_end - range_start);
     let started = std::time::Instant::now();
-    let extent = vk::Extent2D { width, height };
     let traced = settings.primary == Primary::Rays;
     let backdrop = settings.backdrop_for(scene.environment.is_some());
     let look = super::resolve::DisplayLook {
@@ -306,51 +238,11 @@ pub fn render_samples(
     }
     let gbuffer_pass = GBufferPass::new(device)?;
     let materials = gbuffer_pass.materials(scene, &on_gpu.textures)?;
-    // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
-    let gbuffer = if traced { GBuffer::new(device, 1, 1)? } else { GBuffer::new(device, width, height)? };
+    let targets = FrameTargets::new(device, width, height, traced)?;
     let ray_scene = on_gpu.ray_scene(device, scene)?;
     let batch = batch_size(u64::from(width) * u64::from(height), spp);
-    let mut tlas = DynamicTlas::new(device, "scene TLAS", ray_scene.traced_instances.len() as u32, batch)?;
-
-    let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-    let accumulation = Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?;
-    // Per pixel, the fixed-point sums of its samples (fixed_point.glsl): what makes the total independent of the
-    // samples' order and grouping.
-    let sums = Buffer::new(
-        device,
-        "sample sums",
-        u64::from(width) * u64::from(height) * crate::partial::BYTES_PER_PIXEL,
-        vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
-        MemoryLocation::GpuOnly,
-        16,
-    )?;
-    let display = Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?;
-
-    // Lights per sample slot; the count can only shrink over the shutter (degenerate triangles drop out).
-    let rest = scene.node_world_transforms(None);
-    let radius = scene.bounds().map(|(lo, hi)| (hi - lo).length() * 0.5).unwrap_or(1.0);
-    let lights_at = |t: f32| {
-        let moved = scene.node_world_transforms(Some(t));
-        let transforms = scene.instance_transforms_from(&moved);
-        (LightSet::at(scene, &moved, &transforms, &rest, radius), transforms)
-    };
-    let (first_lights, _) = lights_at(scene.shutter.0);
-    // Analytic lights (the environment, then the scene's lights: some may drop out at a time where their node's
-    // transform is not finite) and the emissive triangles, whose count does not change with time.
-    let analytic_capacity = usize::from(scene.environment.is_some()) + scene.lights.len();
-    let light_capacity = (analytic_capacity + first_lights.lights.len() - first_lights.analytic).max(1);
-    let light_bytes = (light_capacity * std::mem::size_of::<GpuLight>()) as u64;
-    // Per-sample-slot buffers the host refills (or reads back) once per batch.
-    let per_slot = |name: &str, bytes_per_slot: u64, location: MemoryLocation| {
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        Buffer::new(device, name, bytes_per_slot * u64::from(batch), usage, location, 16)
-    };
-    let mut lights = per_slot("lights", light_bytes, MemoryLocation::CpuToGpu)?;
-    let mut counters = per_slot("sample counters", counter_bytes(1), MemoryLocation::GpuToCpu)?;
-    let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
-    let mut cameras = per_slot("sample cameras", camera_bytes, MemoryLocation::CpuToGpu)?;
-    // The draws of a batch's samples: one buffer and descriptor set for the frame, refilled per batch.
-    let mut draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
+    let draws = gbuffer_pass.inputs_for_slots(scene, &on_gpu.geometry, &on_gpu.textures, &materials, batch)?;
+    let mut slots = SampleSlots::new(device, scene, settings, &ray_scene, draws, batch)?;
     // Path vertices: the visible surface and its bounces.
     let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
     let accumulate = AccumulatePass::new(
@@ -367,19 +259,19 @@ pub fn render_samples(
         },
     )?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
-        tlas: &tlas.structure,
-        gbuffer: &gbuffer,
-        sums: &sums,
+        tlas: &slots.tlas.structure,
+        gbuffer: &targets.gbuffer,
+        sums: &targets.sums,
         materials: &materials,
-        lights: &lights,
+        lights: &slots.lights,
         primitives: &ray_scene.records,
         textures: &on_gpu.textures,
-        counters: &counters,
-        cameras: &cameras,
+        counters: &slots.counters,
+        cameras: &slots.cameras,
         environment: &on_gpu.environment,
     })?;
-    // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on.
-    // BSDF sampling alone casts one more ray past the last vertex.
+    // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on; BSDF sampling
+    // alone casts one more ray past the last vertex.
     let rays_per_pixel = 2 * u64::from(max_depth) + 1;
     let ray_log = if options.log_rays {
         Some(super::ray_log::RayLog::new(device, u64::from(width) * u64::from(height) * rays_per_pixel)?)
@@ -387,11 +279,11 @@ pub fn render_samples(
         None
     };
     let resolve = ResolvePass::new(device)?;
-    let resolve_set = resolve.descriptor_set(&sums, &accumulation, &display)?;
+    let resolve_set = resolve.descriptor_set(&targets.sums, &targets.accumulation, &targets.display)?;
     let resolved_images = super::resolve::ResolvedImages {
         set: &resolve_set,
-        accumulation: &accumulation,
-        display: &display,
+        accumulation: &targets.accumulation,
+        display: &targets.display,
         samples: held,
     };
     let timer = if options.timestamps {
@@ -400,22 +292,31 @@ pub fn render_samples(
         None
     };
     let device_bytes = device.allocator().generate_report().total_allocated_bytes;
-    let gbuffer_bytes = if traced { 0 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
-    let image_bytes = u64::from(width) * u64::from(height) * (gbuffer_bytes + 16 + 4 + crate::partial::BYTES_PER_PIXEL);
-
-    let sampler = sampler_index(settings.sampler);
-    let seed = seed32(settings.seed);
+    let frame_push = AccumulatePush {
+        background: settings.background.extend(backdrop.code() as f32),
+        width,
+        height,
+        sample_count: spp,
+        sampler_kind: sampler_index(settings.sampler),
+        seed: seed32(settings.seed),
+        max_depth,
+        ray_log: ray_log.as_ref().map_or(0, |log| log.address()),
+        indirect: u32::from(settings.indirect),
+        direct_light: options.direct_light.shader_value(),
+        alpha_moment: u32::from(options.luminance_moments),
+        sabotage: options.sabotage.bits(),
+        ..bytemuck::Zeroable::zeroed()
+    };
     let mut times = PassTimes::default();
     let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
     let mut done = range_start;
-    let mut skipped_warned = false;
     let initial = match resume {
         Some(r) => Some(Buffer::with_data(device, "resumed sums", &r.counts, vk::BufferUsageFlags::TRANSFER_SRC, 16)?),
         None => None,
     };
     // What the sums hold once the samples up to `done` are in: read back for a checkpoint or a part.
     let held_sums = |done: u32| -> Result<crate::partial::PartialSums> {
-        let counts = crate::vk::readback::read_buffer::<u64>(device, &sums, Access::COMPUTE_READ_WRITE)?;
+        let counts = crate::vk::readback::read_buffer::<u64>(device, &targets.sums, Access::COMPUTE_READ_WRITE)?;
         let mut samples = crate::partial::SampleSet::range(range_start, done);
         if let Some(r) = resume {
             samples = r.samples.union(&samples)?;
@@ -426,101 +327,26 @@ pub fn render_samples(
     if !progress(0, range_end - range_start) {
         return Err(Interrupted.into());
     }
+    let passes = SamplePasses { gbuffer: &gbuffer_pass, accumulate: &accumulate, set: &accumulate_set, traced };
     while done < range_end {
         let count = batch.min(range_end - done);
         // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
-        let mut samples = Vec::with_capacity(count as usize);
-        for slot in 0..count {
-            let index = done + slot;
-            let (t, camera_sample, camera) = camera_sample_at(scene, settings, index);
-            // Node transforms once per sample: instances (TLAS, draws) and lights all come from them.
-            let (set, transforms) = lights_at(t);
-            tlas.write_slot(slot, &ray_scene.tlas_instances(scene, &transforms))?;
-            if set.skipped_triangles > 0 && !skipped_warned {
-                skipped_warned = true;
-                eprintln!(
-                    "warning: {} emissive triangles beyond the first {} are not sampled as lights",
-                    set.skipped_triangles,
-                    super::lights::MAX_EMISSIVE_TRIANGLES
-                );
-            }
-            let light_count = set.lights.len().min(light_capacity);
-            lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
-            draws.write_slot(slot, &transforms)?;
-            cameras.write(u64::from(slot) * camera_bytes, bytemuck::bytes_of(&gpu_camera(&camera, width, height)))?;
-            let orthographic = matches!(camera.projection, Projection::Orthographic { .. });
-            let forward = camera.world_from_camera.transform_vector3(-Vec3::Z).normalize_or_zero();
-            let push = AccumulatePush {
-                eye: camera_sample.eye.extend(if orthographic { 1.0 } else { 0.0 }),
-                forward: forward.extend(0.0),
-                background: settings.background.extend(backdrop.code() as f32),
-                width,
-                height,
-                sample_index: index,
-                sample_count: spp,
-                sampler_kind: sampler,
-                seed,
-                light_offset: (slot as usize * light_capacity) as u32,
-                light_count: light_count as u32,
-                analytic_light_count: set.analytic.min(light_count) as u32,
-                counter_slot: slot,
-                max_depth,
-                total_light_power: set.total_power,
-                ray_log: ray_log.as_ref().filter(|_| index == 0).map_or(0, |log| log.address()),
-                indirect: u32::from(settings.indirect),
-                direct_light: options.direct_light.shader_value(),
-                alpha_moment: u32::from(options.luminance_moments),
-                sabotage: options.sabotage.bits(),
-                pad: [0; 2],
-            };
-            samples.push((camera_sample, push));
-        }
-        counters.write(0, &vec![0u8; counter_bytes(batch) as usize])?;
+        let samples = (0..count).map(|slot| slots.fill(slot, done + slot, &frame_push)).collect::<Result<Vec<_>>>()?;
+        slots.reset_counters(batch)?;
         if let Some(timer) = &timer {
             timer.reset();
         }
         let last = done + count == range_end;
         submit_and_wait(device, "sample batch", |cmd| {
-            for (slot, (camera_sample, push)) in samples.iter().enumerate() {
-                let first = done == range_start && slot == 0;
+            for (slot, sample) in samples.iter().enumerate() {
+                // The sums start from zero, or from what a checkpoint or another part held.
+                let sums_from = (done == range_start && slot == 0).then_some(initial.as_ref());
                 let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
                     if let Some(timer) = &timer {
                         timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
                     }
                 };
-                stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
-                tlas.record_build(cmd, slot as u32);
-                stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
-                // The reference mode rasterises its one-texel stand-in once, so the set reads defined texels.
-                if !traced || first {
-                    let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
-                    gbuffer_pass.record(cmd, &gbuffer, &draws, slot as u32, camera_sample, last_read);
-                    for image in &gbuffer.color {
-                        image_barrier(
-                            device,
-                            cmd,
-                            image,
-                            (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
-                            (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
-                        );
-                    }
-                }
-                stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
-                if first {
-                    // The sums start from zero, or from what a checkpoint or another part held.
-                    match &initial {
-                        Some(from) => {
-                            let region = [vk::BufferCopy::default().size(from.size)];
-                            unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, sums.raw, &region) };
-                        }
-                        None => unsafe { device.raw.cmd_fill_buffer(cmd, sums.raw, 0, vk::WHOLE_SIZE, 0) },
-                    }
-                    buffer_barrier(device, cmd, &sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
-                } else {
-                    memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-                }
-                accumulate.record(cmd, &accumulate_set, push);
-                stamp(3, accumulate.stage());
+                passes.record(cmd, &targets, &slots, slot as u32, sample, sums_from, &stamp);
             }
             memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
             if last {
@@ -535,23 +361,10 @@ pub fn render_samples(
             }
             Ok(())
         })?;
-        let counts: Vec<u32> = counters.read()?;
-        for slot in 0..count as usize {
-            shadow_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + COUNTER_SHADOW_RAYS]);
-            secondary_rays += u64::from(counts[slot * COUNTERS_PER_SLOT + COUNTER_SECONDARY_RAYS]);
-        }
+        let (shadow, secondary) = slots.rays_counted(count)?;
+        (shadow_rays, secondary_rays) = (shadow_rays + shadow, secondary_rays + secondary);
         if let Some(timer) = &timer {
-            let ns = timer.read_range_ns(0, count * TIMESTAMPS_PER_SAMPLE)?;
-            for slot in 0..count {
-                let t = &ns[(slot * TIMESTAMPS_PER_SAMPLE) as usize..];
-                times.tlas_ms += (t[1] - t[0]) / 1e6;
-                times.gbuffer_ms += (t[2] - t[1]) / 1e6;
-                times.accumulate_ms += (t[3] - t[2]) / 1e6;
-            }
-            if last {
-                let r = timer.read_range_ns(batch * TIMESTAMPS_PER_SAMPLE, 2)?;
-                times.resolve_ms += (r[1] - r[0]) / 1e6;
-            }
+            times.add_batch(timer, count, last.then_some(batch))?;
         }
         done += count;
         let stop = !progress(done - range_start, range_end - range_start) && done < range_end;
@@ -567,18 +380,19 @@ pub fn render_samples(
     }
     let super::resolve::ResolvedSums { linear, display, exposure } =
         resolve.read_out(&resolved_images, look, settings.auto_exposure)?;
+    let samples = range_end - range_start;
     let stats = FrameStats {
         trace: accumulate.path(),
-        samples: range_end - range_start,
+        samples,
         width,
         height,
-        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(range_end - range_start) } else { 0 },
+        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(samples) } else { 0 },
         shadow_rays,
         secondary_rays,
         seconds: started.elapsed().as_secs_f64(),
         pass_times: options.timestamps.then_some(times),
         device_bytes,
-        image_bytes,
+        image_bytes: targets.image_bytes(),
     };
     let ray_log = match &ray_log {
         Some(log) => log.rays()?,
@@ -586,6 +400,144 @@ pub fn render_samples(
     };
     let sums = if options.keep_sums { Some(held_sums(range_end)?) } else { None };
     Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
+}
+
+/// The samples `options.samples` asks for (all of the frame's when None), checked against the frame and the sums
+/// a render goes on from.
+fn sample_range(
+    settings: &RenderSettings,
+    options: &FrameOptions,
+    resume: Option<&crate::partial::PartialSums>,
+) -> Result<(u32, u32)> {
+    let (width, height, spp) = (settings.width, settings.height, settings.spp);
+    if width == 0 || height == 0 || spp == 0 {
+        bail!("nothing to render: {width}x{height} pixels, {spp} samples per pixel");
+    }
+    let (range_start, range_end) = options.samples.unwrap_or((0, spp));
+    // An empty range is what a render resumed from a checkpoint that holds all of its samples has left.
+    if range_start > range_end || range_end > spp || (range_start == range_end && resume.is_none()) {
+        bail!("samples {range_start}..{range_end} are not a range within the frame's {spp}");
+    }
+    if let Some(r) = resume {
+        r.check_fits(width, height, spp)?;
+        if let Some((a, b)) = r.samples.overlap(&crate::partial::SampleSet::range(range_start, range_end)) {
+            bail!("the sums to go on from hold samples {a}..{b} already");
+        }
+    }
+    Ok((range_start, range_end))
+}
+
+/// The images and buffers a frame's passes write, per pixel: the G-buffer (what the accumulation pass reads),
+/// the fixed-point sums (fixed_point.glsl: what makes the total independent of the samples' order and
+/// grouping), and the resolve's float and 8-bit images.
+struct FrameTargets {
+    gbuffer: GBuffer,
+    sums: Buffer,
+    accumulation: Image,
+    display: Image,
+    traced: bool,
+}
+
+impl FrameTargets {
+    fn new(device: &Arc<Device>, width: u32, height: u32, traced: bool) -> Result<Self> {
+        let extent = vk::Extent2D { width, height };
+        let storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        // Primary rays need no G-buffer; a one-texel stand-in keeps the accumulation's descriptor set whole.
+        let gbuffer = if traced { GBuffer::new(device, 1, 1)? } else { GBuffer::new(device, width, height)? };
+        let sums = Buffer::new(
+            device,
+            "sample sums",
+            u64::from(width) * u64::from(height) * crate::partial::BYTES_PER_PIXEL,
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::GpuOnly,
+            16,
+        )?;
+        Ok(Self {
+            gbuffer,
+            sums,
+            accumulation: Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?,
+            display: Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?,
+            traced,
+        })
+    }
+
+    /// Bytes of the per-pixel images: G-buffer (none in the reference mode), accumulation, display, sums.
+    fn image_bytes(&self) -> u64 {
+        let gbuffer = if self.traced { 0 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
+        let extent = self.accumulation.extent;
+        u64::from(extent.width) * u64::from(extent.height) * (gbuffer + 16 + 4 + crate::partial::BYTES_PER_PIXEL)
+    }
+}
+
+/// A sample's passes in the order they run, each with the barriers that make what it reads ready.
+struct SamplePasses<'a> {
+    gbuffer: &'a GBufferPass,
+    accumulate: &'a AccumulatePass,
+    set: &'a crate::vk::descriptors::DescriptorSet,
+    traced: bool,
+}
+
+impl SamplePasses<'_> {
+    /// Records sample `slot`: its TLAS build, its G-buffer pass (the reference mode rasterises its one-texel
+    /// stand-in once, so the set reads defined texels), and its accumulation into the sums. `sums_from` is set
+    /// for the frame's first sample: the sums start from that buffer (a checkpoint or another part), or zero.
+    #[allow(clippy::too_many_arguments)]
+    fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        targets: &FrameTargets,
+        slots: &SampleSlots<'_>,
+        slot: u32,
+        sample: &SampleRecord,
+        sums_from: Option<Option<&Buffer>>,
+        stamp: &dyn Fn(u32, vk::PipelineStageFlags2),
+    ) {
+        let device = targets.sums.device();
+        let first = sums_from.is_some();
+        stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
+        slots.tlas.record_build(cmd, slot);
+        stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
+        if !self.traced || first {
+            let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
+            self.gbuffer.record_for_sampling(cmd, &targets.gbuffer, &slots.draws, slot, &sample.camera, last_read);
+        }
+        stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
+        match sums_from {
+            Some(from) => {
+                match from {
+                    Some(from) => {
+                        let region = [vk::BufferCopy::default().size(from.size)];
+                        unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, targets.sums.raw, &region) };
+                    }
+                    None => unsafe { device.raw.cmd_fill_buffer(cmd, targets.sums.raw, 0, vk::WHOLE_SIZE, 0) },
+                }
+                buffer_barrier(device, cmd, &targets.sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+            }
+            None => memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE),
+        }
+        self.accumulate.record(cmd, self.set, &sample.push);
+        stamp(3, self.accumulate.stage());
+    }
+}
+
+impl PassTimes {
+    /// Adds a batch's `count` samples from their timestamps, and the resolve's when the batch (of `slots`) ran it.
+    fn add_batch(&mut self, timer: &TimestampPool, count: u32, resolve_of: Option<u32>) -> Result<()> {
+        let ns = timer.read_range_ns(0, count * TIMESTAMPS_PER_SAMPLE)?;
+        for slot in 0..count {
+            let t = &ns[(slot * TIMESTAMPS_PER_SAMPLE) as usize..];
+            self.tlas_ms += (t[1] - t[0]) / 1e6;
+            self.gbuffer_ms += (t[2] - t[1]) / 1e6;
+            self.accumulate_ms += (t[3] - t[2]) / 1e6;
+        }
+        if let Some(slots) = resolve_of {
+            let r = timer.read_range_ns(slots * TIMESTAMPS_PER_SAMPLE, 2)?;
+            self.resolve_ms += (r[1] - r[0]) / 1e6;
+        }
+        Ok(())
+    }
 }
 
 /// A render with nothing left to sample: the frame its sums make.

@@ -325,6 +325,29 @@ impl GBufferPass {
         });
     }
 
+    /// [`Self::record`], then the colour images to `SHADER_READ_ONLY_OPTIMAL` for the accumulation pass, which
+    /// samples them texel by texel: the pass owns both of its transitions.
+    pub fn record_for_sampling(
+        &self,
+        cmd: vk::CommandBuffer,
+        gbuffer: &GBuffer,
+        inputs: &GBufferInputs,
+        slot: u32,
+        sample: &CameraSample,
+        last_read: Access,
+    ) {
+        self.record(cmd, gbuffer, inputs, slot, sample, last_read);
+        for image in &gbuffer.color {
+            image_barrier(
+                &self.device,
+                cmd,
+                image,
+                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
+                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
+            );
+        }
+    }
+
     /// Renders one sample and reads every attachment back (for AOVs and tests).
     pub fn render_to_host(
         &self,

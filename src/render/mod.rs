@@ -15,6 +15,7 @@ pub mod ray_log;
 pub mod ray_probe;
 pub mod ray_scene;
 pub mod resolve;
+pub mod sample_slots;
 pub mod solid;
 pub mod textures;
 
