@@ -124,73 +124,7 @@ impl LightSet {
             powers.push(power);
         }
         let analytic = lights.len();
-        let mut skipped_triangles = 0;
-        'instances: for (instance, world) in scene.instances.iter().zip(transforms) {
-            let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
-            for primitive in &scene.meshes[instance.mesh].primitives {
-                let Some((material_index, material)) =
-                    primitive.material.and_then(|m| Some((m, scene.materials.get(m)?)))
-                else {
-                    continue;
-                };
-                // Chosen by the factor's power over the whole triangle; the shader scales each sample by the
-                // emissive texture at the point it landed on, and drops it where alpha-masking cuts the surface
-                // out (rays pass there), which keeps the estimate unbiased.
-                if luminance(material.emissive) <= 0.0 {
-                    continue;
-                }
-                let first_of_primitive = lights.len();
-                for tri in primitive.indices.chunks_exact(3) {
-                    if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
-                        skipped_triangles += primitive.indices.len() / 3;
-                        continue 'instances;
-                    }
-                    let Some(p) = tri.iter().map(|&i| primitive.positions.get(i as usize)).collect::<Option<Vec<_>>>()
-                    else {
-                        continue;
-                    };
-                    let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
-                    let corners =
-                        |uvs: &[Vec2]| [0, 1, 2].map(|k| uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
-                    let (uv, uv1) = (corners(&primitive.uvs), corners(primitive.uvs1_or_uvs()));
-                    let alpha = [0, 1, 2].map(|k| primitive.colors.get(tri[k] as usize).map_or(1.0, |c| c.w));
-                    let (e1, e2) = (p1 - p0, p2 - p0);
-                    let cross = e1.cross(e2);
-                    let area = 0.5 * cross.length();
-                    if area.is_nan() || area <= 0.0 || !area.is_finite() {
-                        continue;
-                    }
-                    let mut n = cross.normalize();
-                    // glTF's front face winds counter-clockwise; vertex normals, when present, say which side
-                    // the surface faces.
-                    let normal_sum: Vec3 =
-                        tri.iter().filter_map(|&i| primitive.normals.get(i as usize)).map(|&v| normal_matrix * v).sum();
-                    if normal_sum.dot(n) < 0.0 {
-                        n = -n;
-                    }
-                    let two_sided = material.double_sided;
-                    lights.push(GpuLight {
-                        position_kind: p0.extend(light_kind::TRIANGLE),
-                        axis_u: e1.extend(0.0),
-                        axis_v: e2.extend(area),
-                        normal: n.extend(if two_sided { 1.0 } else { 0.0 }),
-                        emission: material.emissive.extend(0.0),
-                        cone: Vec4::ZERO,
-                        uv01: uv[0].extend(uv[1].x).extend(uv[1].y),
-                        uv2_material: uv[2].extend(material_index as f32).extend(0.0),
-                        corner_alpha: Vec3::from_array(alpha).extend(1.0),
-                        uv1_01: uv1[0].extend(uv1[1].x).extend(uv1[1].y),
-                        uv1_2: uv1[2].extend(0.0).extend(0.0),
-                    });
-                    powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
-                }
-                // A plain emitter (its factor alone: no texture to read and nothing cut out at the sampled point)
-                // needs no barycentrics, so its quads can be sampled whole.
-                if material.emissive_texture.is_none() && material.alpha_mode == crate::scene::AlphaMode::Opaque {
-                    merge_parallelograms(&mut lights, &mut powers, first_of_primitive);
-                }
-            }
-        }
+        let skipped_triangles = push_emissive_triangles(scene, transforms, &mut lights, &mut powers);
         // Selection: proportional to power; lights with no power are never chosen.
         let total: f64 = powers.iter().map(|&p| f64::from(p.max(0.0))).sum();
         let mut running = 0.0f64;
@@ -206,6 +140,84 @@ impl LightSet {
         }
         Self { lights, analytic, skipped_triangles, total_power: total as f32 }
     }
+}
+
+/// Every emissive triangle of the scene's instances (at `transforms`) as a light after `lights`, with its power for
+/// selection in `powers`; plain quads made of two triangles become one parallelogram. Returns how many triangles
+/// were left out beyond `MAX_EMISSIVE_TRIANGLES`.
+fn push_emissive_triangles(
+    scene: &Scene,
+    transforms: &[Mat4],
+    lights: &mut Vec<GpuLight>,
+    powers: &mut Vec<f32>,
+) -> usize {
+    let analytic = lights.len();
+    let mut skipped_triangles = 0;
+    'instances: for (instance, world) in scene.instances.iter().zip(transforms) {
+        let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+        for primitive in &scene.meshes[instance.mesh].primitives {
+            let Some((material_index, material)) = primitive.material.and_then(|m| Some((m, scene.materials.get(m)?)))
+            else {
+                continue;
+            };
+            // Chosen by the factor's power over the whole triangle; the shader scales each sample by the
+            // emissive texture at the point it landed on, and drops it where alpha-masking cuts the surface
+            // out (rays pass there), which keeps the estimate unbiased.
+            if luminance(material.emissive) <= 0.0 {
+                continue;
+            }
+            let first_of_primitive = lights.len();
+            for tri in primitive.indices.chunks_exact(3) {
+                if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
+                    skipped_triangles += primitive.indices.len() / 3;
+                    continue 'instances;
+                }
+                let Some(p) = tri.iter().map(|&i| primitive.positions.get(i as usize)).collect::<Option<Vec<_>>>()
+                else {
+                    continue;
+                };
+                let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
+                let corners = |uvs: &[Vec2]| [0, 1, 2].map(|k| uvs.get(tri[k] as usize).copied().unwrap_or(Vec2::ZERO));
+                let (uv, uv1) = (corners(&primitive.uvs), corners(primitive.uvs1_or_uvs()));
+                let alpha = [0, 1, 2].map(|k| primitive.colors.get(tri[k] as usize).map_or(1.0, |c| c.w));
+                let (e1, e2) = (p1 - p0, p2 - p0);
+                let cross = e1.cross(e2);
+                let area = 0.5 * cross.length();
+                if area.is_nan() || area <= 0.0 || !area.is_finite() {
+                    continue;
+                }
+                let mut n = cross.normalize();
+                // glTF's front face winds counter-clockwise; vertex normals, when present, say which side
+                // the surface faces.
+                let normal_sum: Vec3 =
+                    tri.iter().filter_map(|&i| primitive.normals.get(i as usize)).map(|&v| normal_matrix * v).sum();
+                if normal_sum.dot(n) < 0.0 {
+                    n = -n;
+                }
+                let two_sided = material.double_sided;
+                lights.push(GpuLight {
+                    position_kind: p0.extend(light_kind::TRIANGLE),
+                    axis_u: e1.extend(0.0),
+                    axis_v: e2.extend(area),
+                    normal: n.extend(if two_sided { 1.0 } else { 0.0 }),
+                    emission: material.emissive.extend(0.0),
+                    cone: Vec4::ZERO,
+                    uv01: uv[0].extend(uv[1].x).extend(uv[1].y),
+                    uv2_material: uv[2].extend(material_index as f32).extend(0.0),
+                    corner_alpha: Vec3::from_array(alpha).extend(1.0),
+                    uv1_01: uv1[0].extend(uv1[1].x).extend(uv1[1].y),
+                    uv1_2: uv1[2].extend(0.0).extend(0.0),
+                });
+                powers.push(PI * luminance(material.emissive) * area * if two_sided { 2.0 } else { 1.0 });
+            }
+            // A plain emitter (its factor alone: no texture to read and nothing cut out at the sampled point)
+            // needs no barycentrics, so its quads can be sampled whole.
+            if material.emissive_texture.is_none() && material.alpha_mode == crate::scene::AlphaMode::Opaque {
+                merge_parallelograms(lights, powers, first_of_primitive);
+            }
+        }
+    }
+    skipped_triangles
 }
 
 /// The corners of a triangle light as `LightSet::at` stores it (p0, p0 + e1, p0 + e2).
