@@ -236,9 +236,19 @@ fn parallelogram(a: &GpuLight, b: &GpuLight) -> Option<(Vec3, Vec3, Vec3)> {
     let (ca, cb) = (triangle_corners(a), triangle_corners(b));
     let scale = ca.iter().chain(&cb).map(|p| p.abs().max_element()).fold(0.0f32, f32::max).max(1e-6);
     let same = |p: Vec3, q: Vec3| (p - q).abs().max_element() <= 1e-6 * scale;
-    let shared: Vec<Vec3> = ca.iter().copied().filter(|&p| cb.iter().any(|&q| same(p, q))).collect();
-    let [d1, d2] = shared[..] else { return None };
-    let off_a = ca.iter().copied().find(|&p| !same(p, d1) && !same(p, d2))?;
+    // Called per light per sample: the corner off the diagonal is found without allocating.
+    let in_b = ca.map(|p| cb.iter().any(|&q| same(p, q)));
+    if in_b.iter().filter(|&&shared| shared).count() != 2 {
+        return None;
+    }
+    let off = in_b.iter().position(|&shared| !shared)?;
+    // The diagonal's ends in the triangle's own order, which decides which edge the sample's u.x runs along.
+    let (first, second) = match off {
+        0 => (1, 2),
+        1 => (0, 2),
+        _ => (0, 1),
+    };
+    let (off_a, d1, d2) = (ca[off], ca[first], ca[second]);
     let off_b = cb.iter().copied().find(|&q| !same(q, d1) && !same(q, d2))?;
     let mirrored = (d1 + d2 - off_a - off_b).abs().max_element() <= 1e-5 * scale;
     mirrored.then_some((off_a, d1 - off_a, d2 - off_a))
