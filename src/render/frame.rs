@@ -247,16 +247,7 @@ pub fn render_samples(
     let max_depth = settings.bounces.min(crate::scene::settings::MAX_BOUNCES) + 1;
     let accumulate = AccumulatePass::new(
         device,
-        &AccumulateVariant {
-            path: TracePath::choose(settings.trace, device)?,
-            primary_rays: traced,
-            alpha_tested: ray_scene.alpha_tested,
-            environment: scene.environment.is_some(),
-            chains: options.keep_chain_code
-                || super::accumulate::paths_go_on(max_depth, options.direct_light == DirectLight::BsdfSampling),
-            launch: options.accumulate_launch,
-            table_shift: options.misalign_shader_binding_table,
-        },
+        &accumulate_variant(device, scene, settings, options, ray_scene.alpha_tested, max_depth)?,
     )?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &slots.tlas.structure,
@@ -293,19 +284,9 @@ pub fn render_samples(
     };
     let device_bytes = device.allocator().generate_report().total_allocated_bytes;
     let frame_push = AccumulatePush {
-        background: settings.background.extend(backdrop.code() as f32),
-        width,
-        height,
-        sample_count: spp,
-        sampler_kind: sampler_index(settings.sampler),
-        seed: seed32(settings.seed),
         max_depth,
         ray_log: ray_log.as_ref().map_or(0, |log| log.address()),
-        indirect: u32::from(settings.indirect),
-        direct_light: options.direct_light.shader_value(),
-        alpha_moment: u32::from(options.luminance_moments),
-        sabotage: options.sabotage.bits(),
-        ..bytemuck::Zeroable::zeroed()
+        ..frame_push_constants(settings, options, backdrop)
     };
     let mut times = PassTimes::default();
     let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
@@ -327,7 +308,16 @@ pub fn render_samples(
     if !progress(0, range_end - range_start) {
         return Err(Interrupted.into());
     }
-    let passes = SamplePasses { gbuffer: &gbuffer_pass, accumulate: &accumulate, set: &accumulate_set, traced };
+    let passes = SamplePasses {
+        gbuffer: &gbuffer_pass,
+        accumulate: &accumulate,
+        set: &accumulate_set,
+        resolve: &resolve,
+        look,
+        timer: timer.as_ref(),
+        batch,
+        traced,
+    };
     while done < range_end {
         let count = batch.min(range_end - done);
         // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
@@ -337,28 +327,9 @@ pub fn render_samples(
             timer.reset();
         }
         let last = done + count == range_end;
+        let batch_start = (done == range_start).then_some(initial.as_ref());
         submit_and_wait(device, "sample batch", |cmd| {
-            for (slot, sample) in samples.iter().enumerate() {
-                // The sums start from zero, or from what a checkpoint or another part held.
-                let sums_from = (done == range_start && slot == 0).then_some(initial.as_ref());
-                let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
-                    if let Some(timer) = &timer {
-                        timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
-                    }
-                };
-                passes.record(cmd, &targets, &slots, slot as u32, sample, sums_from, &stamp);
-            }
-            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
-            if last {
-                if let Some(timer) = &timer {
-                    timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, batch * TIMESTAMPS_PER_SAMPLE);
-                }
-                memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-                resolve.record_fresh(cmd, &resolved_images, &look);
-                if let Some(timer) = &timer {
-                    timer.write(cmd, vk::PipelineStageFlags2::COMPUTE_SHADER, batch * TIMESTAMPS_PER_SAMPLE + 1);
-                }
-            }
+            passes.record_batch(cmd, &targets, &slots, &samples, batch_start, last.then_some(&resolved_images));
             Ok(())
         })?;
         let (shadow, secondary) = slots.rays_counted(count)?;
@@ -400,6 +371,45 @@ pub fn render_samples(
     };
     let sums = if options.keep_sums { Some(held_sums(range_end)?) } else { None };
     Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
+}
+
+/// Which accumulation pipeline the frame needs (`max_depth` path vertices; ray-traced primaries or the G-buffer).
+fn accumulate_variant(
+    device: &Arc<Device>,
+    scene: &Scene,
+    settings: &RenderSettings,
+    options: &FrameOptions,
+    alpha_tested: bool,
+    max_depth: u32,
+) -> Result<AccumulateVariant> {
+    let bsdf_sampling_alone = options.direct_light == DirectLight::BsdfSampling;
+    Ok(AccumulateVariant {
+        path: TracePath::choose(settings.trace, device)?,
+        primary_rays: settings.primary == Primary::Rays,
+        alpha_tested,
+        environment: scene.environment.is_some(),
+        chains: options.keep_chain_code || super::accumulate::paths_go_on(max_depth, bsdf_sampling_alone),
+        launch: options.accumulate_launch,
+        table_shift: options.misalign_shader_binding_table,
+    })
+}
+
+/// The accumulation pass's push constants every sample of the frame shares (`SampleSlots::fill` adds each
+/// sample's own; the path depth and ray log come from the caller).
+fn frame_push_constants(settings: &RenderSettings, options: &FrameOptions, backdrop: Backdrop) -> AccumulatePush {
+    AccumulatePush {
+        background: settings.background.extend(backdrop.code() as f32),
+        width: settings.width,
+        height: settings.height,
+        sample_count: settings.spp,
+        sampler_kind: sampler_index(settings.sampler),
+        seed: seed32(settings.seed),
+        indirect: u32::from(settings.indirect),
+        direct_light: options.direct_light.shader_value(),
+        alpha_moment: u32::from(options.luminance_moments),
+        sabotage: options.sabotage.bits(),
+        ..bytemuck::Zeroable::zeroed()
+    }
 }
 
 /// The samples `options.samples` asks for (all of the frame's when None), checked against the frame and the sums
@@ -476,10 +486,51 @@ struct SamplePasses<'a> {
     gbuffer: &'a GBufferPass,
     accumulate: &'a AccumulatePass,
     set: &'a crate::vk::descriptors::DescriptorSet,
+    resolve: &'a ResolvePass,
+    look: super::resolve::DisplayLook,
+    /// Timestamps: TIMESTAMPS_PER_SAMPLE per slot of the `batch`, then two around the resolve.
+    timer: Option<&'a TimestampPool>,
+    batch: u32,
     traced: bool,
 }
 
 impl SamplePasses<'_> {
+    /// Records a batch's samples, then makes their sums visible to the host (ray counters, checkpoints) and, for
+    /// the frame's last batch, resolves them (`resolve_into`). `sums_from` is set for the frame's first batch: its
+    /// first sample starts the sums from that buffer, or from zero.
+    fn record_batch(
+        &self,
+        cmd: vk::CommandBuffer,
+        targets: &FrameTargets,
+        slots: &SampleSlots<'_>,
+        samples: &[SampleRecord],
+        sums_from: Option<Option<&Buffer>>,
+        resolve_into: Option<&super::resolve::ResolvedImages<'_>>,
+    ) {
+        let device = targets.sums.device();
+        for (slot, sample) in samples.iter().enumerate() {
+            let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
+                if let Some(timer) = self.timer {
+                    timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
+                }
+            };
+            let sums_from = sums_from.filter(|_| slot == 0);
+            self.record(cmd, targets, slots, slot as u32, sample, sums_from, &stamp);
+        }
+        memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
+        if let Some(images) = resolve_into {
+            let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
+                if let Some(timer) = self.timer {
+                    timer.write(cmd, stage, self.batch * TIMESTAMPS_PER_SAMPLE + i);
+                }
+            };
+            stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
+            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
+            self.resolve.record_fresh(cmd, images, &self.look);
+            stamp(1, vk::PipelineStageFlags2::COMPUTE_SHADER);
+        }
+    }
+
     /// Records sample `slot`: its TLAS build, its G-buffer pass (the reference mode rasterises its one-texel
     /// stand-in once, so the set reads defined texels), and its accumulation into the sums. `sums_from` is set
     /// for the frame's first sample: the sums start from that buffer (a checkpoint or another part), or zero.
