@@ -261,14 +261,7 @@ pub fn render_samples(
         cameras: &slots.cameras,
         environment: &on_gpu.environment,
     })?;
-    // Each pixel casts at most one camera ray and, per path vertex, one shadow ray and one ray on; BSDF sampling
-    // alone casts one more ray past the last vertex.
-    let rays_per_pixel = 2 * u64::from(max_depth) + 1;
-    let ray_log = if options.log_rays {
-        Some(super::ray_log::RayLog::new(device, u64::from(width) * u64::from(height) * rays_per_pixel)?)
-    } else {
-        None
-    };
+    let ray_log = if options.log_rays { Some(ray_log_for(device, settings, max_depth)?) } else { None };
     let resolve = ResolvePass::new(device)?;
     let resolve_set = resolve.descriptor_set(&targets.sums, &targets.accumulation, &targets.display)?;
     let resolved_images = super::resolve::ResolvedImages {
@@ -295,15 +288,7 @@ pub fn render_samples(
         Some(r) => Some(Buffer::with_data(device, "resumed sums", &r.counts, vk::BufferUsageFlags::TRANSFER_SRC, 16)?),
         None => None,
     };
-    // What the sums hold once the samples up to `done` are in: read back for a checkpoint or a part.
-    let held_sums = |done: u32| -> Result<crate::partial::PartialSums> {
-        let counts = crate::vk::readback::read_buffer::<u64>(device, &targets.sums, Access::COMPUTE_READ_WRITE)?;
-        let mut samples = crate::partial::SampleSet::range(range_start, done);
-        if let Some(r) = resume {
-            samples = r.samples.union(&samples)?;
-        }
-        Ok(crate::partial::PartialSums { width, height, spp, samples, counts })
-    };
+    let held_sums = |done: u32| targets.held_sums(spp, resume, range_start..done);
     let mut last_checkpoint = std::time::Instant::now();
     if !progress(0, range_end - range_start) {
         return Err(Interrupted.into());
@@ -371,6 +356,14 @@ pub fn render_samples(
     };
     let sums = if options.keep_sums { Some(held_sums(range_end)?) } else { None };
     Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
+}
+
+/// Room for every ray one sample's accumulation pass casts (`FrameOptions::log_rays`): per pixel at most one
+/// camera ray and, per path vertex, one shadow ray and one ray on; BSDF sampling alone casts one more ray past the
+/// last vertex.
+fn ray_log_for(device: &Arc<Device>, settings: &RenderSettings, max_depth: u32) -> Result<super::ray_log::RayLog> {
+    let rays_per_pixel = 2 * u64::from(max_depth) + 1;
+    super::ray_log::RayLog::new(device, u64::from(settings.width) * u64::from(settings.height) * rays_per_pixel)
 }
 
 /// Which accumulation pipeline the frame needs (`max_depth` path vertices; ray-traced primaries or the G-buffer).
@@ -471,6 +464,24 @@ impl FrameTargets {
             display: Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?,
             traced,
         })
+    }
+
+    /// What the sums hold once the samples `rendered` are in, on top of `resume`'s: read back for a checkpoint or
+    /// a part.
+    fn held_sums(
+        &self,
+        spp: u32,
+        resume: Option<&crate::partial::PartialSums>,
+        rendered: std::ops::Range<u32>,
+    ) -> Result<crate::partial::PartialSums> {
+        let device = self.sums.device();
+        let counts = crate::vk::readback::read_buffer::<u64>(device, &self.sums, Access::COMPUTE_READ_WRITE)?;
+        let mut samples = crate::partial::SampleSet::range(rendered.start, rendered.end);
+        if let Some(r) = resume {
+            samples = r.samples.union(&samples)?;
+        }
+        let vk::Extent2D { width, height } = self.accumulation.extent;
+        Ok(crate::partial::PartialSums { width, height, spp, samples, counts })
     }
 
     /// Bytes of the per-pixel images: G-buffer (none in the reference mode), accumulation, display, sums.
