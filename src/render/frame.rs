@@ -312,7 +312,11 @@ pub fn render_samples(
             timer.reset();
         }
         let last = done + count == range_end;
-        let batch_start = (done == range_start).then_some(initial.as_ref());
+        let batch_start = match (done == range_start, &initial) {
+            (false, _) => SumsStart::Continue,
+            (true, Some(from)) => SumsStart::From(from),
+            (true, None) => SumsStart::Zero,
+        };
         submit_and_wait(device, "sample batch", |cmd| {
             passes.record_batch(cmd, &targets, &slots, &samples, batch_start, last.then_some(&resolved_images));
             Ok(())
@@ -492,6 +496,15 @@ impl FrameTargets {
     }
 }
 
+/// How a sample finds the fixed-point sums: as the previous sample left them, or (the frame's first sample)
+/// started from zero or from a buffer of sums (a checkpoint or another part).
+#[derive(Clone, Copy)]
+enum SumsStart<'a> {
+    Continue,
+    Zero,
+    From(&'a Buffer),
+}
+
 /// A sample's passes in the order they run, each with the barriers that make what it reads ready.
 struct SamplePasses<'a> {
     gbuffer: &'a GBufferPass,
@@ -507,15 +520,15 @@ struct SamplePasses<'a> {
 
 impl SamplePasses<'_> {
     /// Records a batch's samples, then makes their sums visible to the host (ray counters, checkpoints) and, for
-    /// the frame's last batch, resolves them (`resolve_into`). `sums_from` is set for the frame's first batch: its
-    /// first sample starts the sums from that buffer, or from zero.
+    /// the frame's last batch, resolves them (`resolve_into`). `sums` says how the batch's first sample finds the
+    /// sums.
     fn record_batch(
         &self,
         cmd: vk::CommandBuffer,
         targets: &FrameTargets,
         slots: &SampleSlots<'_>,
         samples: &[SampleRecord],
-        sums_from: Option<Option<&Buffer>>,
+        sums: SumsStart<'_>,
         resolve_into: Option<&super::resolve::ResolvedImages<'_>>,
     ) {
         let device = targets.sums.device();
@@ -525,8 +538,8 @@ impl SamplePasses<'_> {
                     timer.write(cmd, stage, slot as u32 * TIMESTAMPS_PER_SAMPLE + i);
                 }
             };
-            let sums_from = sums_from.filter(|_| slot == 0);
-            self.record(cmd, targets, slots, slot as u32, sample, sums_from, &stamp);
+            let sums = if slot == 0 { sums } else { SumsStart::Continue };
+            self.record(cmd, targets, slots, slot as u32, sample, sums, &stamp);
         }
         memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
         if let Some(images) = resolve_into {
@@ -543,7 +556,7 @@ impl SamplePasses<'_> {
     }
 
     /// Records sample `slot`: its TLAS build, its G-buffer pass (the reference mode rasterises its one-texel
-    /// stand-in once, so the set reads defined texels), and its accumulation into the sums. `sums_from` is set
+    /// stand-in once, so the set reads defined texels), and its accumulation into the sums. `sums` says whether the
     /// for the frame's first sample: the sums start from that buffer (a checkpoint or another part), or zero.
     #[allow(clippy::too_many_arguments)]
     fn record(
@@ -553,11 +566,11 @@ impl SamplePasses<'_> {
         slots: &SampleSlots<'_>,
         slot: u32,
         sample: &SampleRecord,
-        sums_from: Option<Option<&Buffer>>,
+        sums: SumsStart<'_>,
         stamp: &dyn Fn(u32, vk::PipelineStageFlags2),
     ) {
         let device = targets.sums.device();
-        let first = sums_from.is_some();
+        let first = !matches!(sums, SumsStart::Continue);
         stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
         slots.tlas.record_build(cmd, slot);
         stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
@@ -566,18 +579,20 @@ impl SamplePasses<'_> {
             self.gbuffer.record_for_sampling(cmd, &targets.gbuffer, &slots.draws, slot, &sample.camera, last_read);
         }
         stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
-        match sums_from {
-            Some(from) => {
-                match from {
-                    Some(from) => {
-                        let region = [vk::BufferCopy::default().size(from.size)];
-                        unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, targets.sums.raw, &region) };
-                    }
-                    None => unsafe { device.raw.cmd_fill_buffer(cmd, targets.sums.raw, 0, vk::WHOLE_SIZE, 0) },
-                }
-                buffer_barrier(device, cmd, &targets.sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        let sums_written = || {
+            buffer_barrier(device, cmd, &targets.sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
+        };
+        match sums {
+            SumsStart::Continue => memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE),
+            SumsStart::Zero => {
+                unsafe { device.raw.cmd_fill_buffer(cmd, targets.sums.raw, 0, vk::WHOLE_SIZE, 0) };
+                sums_written();
             }
-            None => memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE),
+            SumsStart::From(from) => {
+                let region = [vk::BufferCopy::default().size(from.size)];
+                unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, targets.sums.raw, &region) };
+                sums_written();
+            }
         }
         self.accumulate.record(cmd, self.set, &sample.push);
         stamp(3, self.accumulate.stage());
