@@ -1,11 +1,13 @@
 #version 460
 // G-buffer pass: the material and the Blinn bump-mapped shading normal (Blinn 1978) with a Perlin height field
 // (Perlin 1985, 2002), evaluated procedurally by material.glsl, the evaluation ray hits share; then packed into
-// the attachments (gbuffer_layout.glsl).
+// the attachments (gbuffer_encoding.glsl).
 #extension GL_EXT_nonuniform_qualifier : require
 #extension GL_EXT_scalar_block_layout : require
 #include "gbuffer_layout.glsl"
 #include "material.glsl"
+#define GBUFFER_ENCODE
+#include "gbuffer_encoding.glsl"
 
 layout(set = 0, binding = GBUFFER_BINDING_TEXTURES) uniform sampler2D textures[];
 
@@ -17,15 +19,6 @@ layout(location = 4) in vec3 in_dpdu;
 layout(location = 5) in vec3 in_dpdv;
 layout(location = 6) flat in uint in_draw;
 layout(location = 7) in vec2 in_uv1;
-
-layout(location = GBUFFER_POSITION) out vec4 out_position;
-layout(location = GBUFFER_SHADING_NORMAL) out vec4 out_shading_normal;
-layout(location = GBUFFER_GEOMETRIC_NORMAL) out vec4 out_geometric_normal;
-layout(location = GBUFFER_ALBEDO) out vec4 out_albedo;
-layout(location = GBUFFER_MATERIAL) out vec4 out_material;
-layout(location = GBUFFER_EMISSION) out vec4 out_emission;
-layout(location = GBUFFER_SPECULAR_COLOR) out vec4 out_specular_color;
-layout(location = GBUFFER_IDS) out uvec2 out_ids;
 
 // The fragment reads material textures by its implicit derivatives (material.glsl's contract).
 vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
@@ -55,14 +48,22 @@ void main() {
         geometric = -geometric;
     }
 
-    out_position = vec4(in_world_position, -dot(pc.view_z_row, vec4(in_world_position, 1.0)));
-    out_shading_normal = vec4(shading, p.height);
-    // The specular factor rides in the geometric normal's spare channel (16-bit float).
-    out_geometric_normal = vec4(geometric, p.shading.specular);
-    out_albedo = p.base;
-    out_material = vec4(p.shading.metallic, p.shading.roughness, p.shading.transmission, pack_ior(p.shading.ior));
-    out_emission = vec4(p.emission, 0.0);
-    // The texel alone: the factor may exceed 1, beyond what this 8-bit sRGB attachment holds.
-    out_specular_color = vec4(p.specular_color_texel, 1.0);
-    out_ids = uvec2(d.instance + 1u, d.material);
+    GBufferTexel t;
+    t.position = in_world_position;
+    t.view_depth = -dot(pc.view_z_row, vec4(in_world_position, 1.0));
+    t.albedo = p.base;
+    t.metallic = p.shading.metallic;
+    t.roughness = p.shading.roughness;
+    t.transmission = p.shading.transmission;
+    t.ior = p.shading.ior;
+    t.emission = p.emission;
+    t.height = p.height;
+    // The texel alone: the factor may exceed 1, beyond what an 8-bit sRGB channel holds.
+    t.specular_color_texel = p.specular_color_texel;
+    t.specular = p.shading.specular;
+    t.instance_plus_one = d.instance + 1u;
+    t.material = d.material;
+    t.shading_normal = shading;
+    t.geometric_normal = geometric;
+    write_gbuffer(t);
 }

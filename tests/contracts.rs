@@ -340,14 +340,12 @@ fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
         .map(|v| (m.names[&v.0].clone(), m.locations[&v.0]))
         .collect();
     let rust = [
-        ("out_position", g::POSITION),
-        ("out_shading_normal", g::SHADING_NORMAL),
-        ("out_geometric_normal", g::GEOMETRIC_NORMAL),
-        ("out_albedo", g::ALBEDO),
-        ("out_material", g::MATERIAL),
-        ("out_emission", g::EMISSION),
-        ("out_specular_color", g::SPECULAR_COLOR),
-        ("out_ids", g::IDS),
+        ("out_position", g::attachment::POSITION),
+        ("out_albedo", g::attachment::ALBEDO),
+        ("out_material", g::attachment::MATERIAL),
+        ("out_emission", g::attachment::EMISSION),
+        ("out_specular", g::attachment::SPECULAR),
+        ("out_surface_ids", g::attachment::SURFACE_IDS),
     ];
     assert_eq!(outputs.len(), g::ATTACHMENTS.len(), "{outputs:?}");
     for (name, index) in rust {

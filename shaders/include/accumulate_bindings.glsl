@@ -24,9 +24,9 @@ layout(constant_id = 4) const uint CHAINS = 1u;
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
 
 layout(set = 0, binding = ACCUMULATE_BINDING_TLAS) uniform accelerationStructureEXT tlas;
-// Every attachment but the ids, at its GBUFFER_* index (gbuffer_layout.glsl).
-layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER) uniform sampler2D gbuffer[GBUFFER_IDS];
-layout(set = 0, binding = ACCUMULATE_BINDING_GBUFFER_IDS) uniform usampler2D gbuffer_ids;
+// The G-buffer's attachments and how to read them.
+#define GBUFFER_DECODE
+#include "gbuffer_encoding.glsl"
 // Per pixel, the sum of its samples in fixed point (fixed_point.glsl), row-major.
 layout(set = 0, binding = ACCUMULATE_BINDING_SUMS, std430) buffer Sums { u64vec4 sums[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_MATERIALS, std430) readonly buffer Materials { GpuMaterial materials[]; };

@@ -4,29 +4,7 @@
 #include "bump.glsl"
 #include "shared_constants.glsl"
 
-// Attachment locations, the one definition gbuffer.frag writes by and path_tracer.glsl reads by (Rust:
-// gbuffer_layout.rs, whose ATTACHMENTS gives the formats; tests/contracts.rs holds the two together):
-//   position          RGBA32F     world xyz, w = view depth of this sample's eye
-//   shading normal    RGBA32F     bumped world normal xyz, w = bump height B(u, v)
-//   geometric normal  RGBA16F     face normal xyz, facing the same side as the shading normal; w = specular factor
-//   albedo            RGBA8 sRGB  base colour x texture x vertex colour, a = alpha
-//   material          RGBA8       metallic, roughness, transmission, pack_ior(ior)
-//   emission          RGBA16F     emitted radiance rgb
-//   specular colour   RGBA8 sRGB  KHR_materials_specular's colour texture (white without one)
-//   ids               RG32UI      instance index + 1 (0: nothing), material index
-// The accumulation pass samples the first seven as one array (binding 1, in this order) and the ids alone.
-const int GBUFFER_POSITION = 0;
-const int GBUFFER_SHADING_NORMAL = 1;
-const int GBUFFER_GEOMETRIC_NORMAL = 2;
-const int GBUFFER_ALBEDO = 3;
-const int GBUFFER_MATERIAL = 4;
-const int GBUFFER_EMISSION = 5;
-const int GBUFFER_SPECULAR_COLOR = 6;
-const int GBUFFER_IDS = 7;
-
-// The index of refraction in an 8-bit unorm channel: 1 to 4 mapped onto 0 to 1.
-float pack_ior(float ior) { return clamp((ior - 1.0) / 3.0, 0.0, 1.0); }
-float unpack_ior(float packed) { return 1.0 + 3.0 * packed; }
+// What each attachment holds and how: gbuffer_encoding.glsl.
 
 struct GBufferDraw {
     mat4 world_from_object;

@@ -44,12 +44,12 @@ vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout
             value = vec4(background_seen(d), 0.0);
         }
     } else {
-        uvec2 ids = texelFetch(gbuffer_ids, p, 0).xy;
+        uvec4 ids = read_gbuffer_surface_ids(p);
         if (ids.x != 0u) {
-            vec3 position = texelFetch(gbuffer[GBUFFER_POSITION], p, 0).xyz;
+            vec3 position = read_gbuffer_position(p);
             vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
             r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
-            Surface s = gbuffer_surface(p, ids.y, v);
+            Surface s = gbuffer_surface(p, ids, v);
             value = vec4(shade_visible(s, v, r, chain, shadow_rays), 1.0);
         } else {
             // The direction this pixel looks in, through its own sub-pixel point and the lens centre.

@@ -40,6 +40,16 @@ const uint SUM_MAX_SAMPLE_LOG2 = 23u;
 const uint SABOTAGE_NO_SHADOW_RAYS = 1u;
 const uint SABOTAGE_FLIPPED_NORMALS = 2u;
 
+// The G-buffer's attachments (gbuffer_encoding.glsl; render::gbuffer_layout::ATTACHMENTS): the location each is
+// written at, and its index in the accumulation pass's sampler array (binding 1) but the surface ids, which come
+// last and alone (binding 2).
+const uint GBUFFER_ATTACHMENT_POSITION = 0u;
+const uint GBUFFER_ATTACHMENT_ALBEDO = 1u;
+const uint GBUFFER_ATTACHMENT_MATERIAL = 2u;
+const uint GBUFFER_ATTACHMENT_EMISSION = 3u;
+const uint GBUFFER_ATTACHMENT_SPECULAR = 4u;
+const uint GBUFFER_ATTACHMENT_SURFACE_IDS = 5u;
+
 // The G-buffer pass's descriptor bindings (gbuffer_layout.glsl, gbuffer.frag; render::gbuffer::GBufferPass).
 const uint GBUFFER_BINDING_DRAWS = 0u;
 const uint GBUFFER_BINDING_MATERIALS = 1u;

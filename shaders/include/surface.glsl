@@ -30,23 +30,22 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
     s.emitter_density = emits && factor > 0.0 ? PI * factor * (m.double_sided != 0 ? 2.0 : 1.0) : 0.0;
 }
 
-Surface gbuffer_surface(ivec2 p, uint material, vec3 v) {
+// The visible surface the G-buffer holds at pixel `p` (covered: its surface ids `ids` name an instance).
+Surface gbuffer_surface(ivec2 p, uvec4 ids, vec3 v) {
+    GBufferTexel t = read_gbuffer(p, ids);
     Surface s;
-    vec4 pos = texelFetch(gbuffer[GBUFFER_POSITION], p, 0);
-    vec4 mat = texelFetch(gbuffer[GBUFFER_MATERIAL], p, 0);
-    s.position = pos.xyz;
-    s.normal = normalize(texelFetch(gbuffer[GBUFFER_SHADING_NORMAL], p, 0).xyz);
-    vec4 geometric = texelFetch(gbuffer[GBUFFER_GEOMETRIC_NORMAL], p, 0);
-    s.geometric = normalize(geometric.xyz);
-    s.emission = texelFetch(gbuffer[GBUFFER_EMISSION], p, 0).rgb;
-    s.m.albedo = texelFetch(gbuffer[GBUFFER_ALBEDO], p, 0).rgb;
-    s.m.metallic = mat.x;
-    s.m.roughness = mat.y;
-    s.m.transmission = mat.z;
-    s.m.ior = unpack_ior(mat.w);
-    s.m.specular = geometric.w;  // factor × texture, in the geometric normal's spare channel (gbuffer.frag)
-    s.m.specular_color = materials[material].specular_color.rgb * texelFetch(gbuffer[GBUFFER_SPECULAR_COLOR], p, 0).rgb;
-    face_viewer(s, v, materials[material]);
+    s.position = t.position;
+    s.normal = t.shading_normal;
+    s.geometric = t.geometric_normal;
+    s.emission = t.emission;
+    s.m.albedo = t.albedo.rgb;
+    s.m.metallic = t.metallic;
+    s.m.roughness = t.roughness;
+    s.m.transmission = t.transmission;
+    s.m.ior = t.ior;
+    s.m.specular = t.specular;
+    s.m.specular_color = materials[t.material].specular_color.rgb * t.specular_color_texel;
+    face_viewer(s, v, materials[t.material]);
     return s;
 }
 

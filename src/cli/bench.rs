@@ -261,7 +261,7 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         );
         println!(
             "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}, 32 of them the \
-             fixed-point sums; target < 100 before them, docs/performance.md)",
+             fixed-point sums; target <= 100 with them, docs/performance.md)",
             f.scene_bytes as f64 / 1048576.0,
             frame_bytes as f64 / 1048576.0,
             frame_bytes as f64 / pixels,

@@ -9,7 +9,7 @@
 //! ([`AccumulateLaunch`]).
 use super::accumulate_layout::{AccumulatePush, COUNTERS_PER_SLOT};
 use super::gbuffer::{GBuffer, GBufferMaterials};
-use super::gbuffer_layout::IDS;
+use super::gbuffer_layout::attachment::SURFACE_IDS;
 use super::textures::GpuTextures;
 use crate::scene::settings::Trace;
 use crate::shaders;
@@ -241,7 +241,7 @@ impl AccumulatePass {
         vec![
             Binding::new(ACCUMULATE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
             // Every G-buffer attachment but the ids, which the next binding reads as unsigned integers.
-            Binding::array(ACCUMULATE_BINDING_GBUFFER, D::COMBINED_IMAGE_SAMPLER, IDS as u32),
+            Binding::array(ACCUMULATE_BINDING_GBUFFER, D::COMBINED_IMAGE_SAMPLER, SURFACE_IDS as u32),
             Binding::new(ACCUMULATE_BINDING_GBUFFER_IDS, D::COMBINED_IMAGE_SAMPLER),
             Binding::new(ACCUMULATE_BINDING_SUMS, D::STORAGE_BUFFER),
             Binding::new(ACCUMULATE_BINDING_MATERIALS, D::STORAGE_BUFFER),
@@ -285,14 +285,14 @@ impl AccumulatePass {
             .color
             .iter()
             .enumerate()
-            .filter(|(i, _)| *i != IDS)
+            .filter(|(i, _)| *i != SURFACE_IDS)
             .map(|(_, image)| (image.view, self.gbuffer_sampler.raw))
             .collect();
         set.acceleration_structure(ACCUMULATE_BINDING_TLAS, inputs.tlas.raw)
             .combined_image_samplers(ACCUMULATE_BINDING_GBUFFER, &gbuffer)
             .combined_image_samplers(
                 ACCUMULATE_BINDING_GBUFFER_IDS,
-                &[(inputs.gbuffer.color[IDS].view, self.gbuffer_sampler.raw)],
+                &[(inputs.gbuffer.color[SURFACE_IDS].view, self.gbuffer_sampler.raw)],
             )
             .storage_buffer(ACCUMULATE_BINDING_SUMS, inputs.sums)
             .storage_buffer(ACCUMULATE_BINDING_MATERIALS, &inputs.materials.buffer)

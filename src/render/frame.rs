@@ -263,10 +263,11 @@ pub fn render_samples(
     })?;
     let ray_log = if options.log_rays { Some(ray_log_for(device, settings, max_depth)?) } else { None };
     let resolve = ResolvePass::new(device)?;
-    let resolve_set = resolve.descriptor_set(&targets.sums, &targets.accumulation, &targets.display)?;
+    let resolve_set = resolve.descriptor_set(&targets.sums, targets.accumulation(), &targets.display)?;
     let resolved_images = super::resolve::ResolvedImages {
         set: &resolve_set,
-        accumulation: &targets.accumulation,
+        accumulation: targets.accumulation(),
+        accumulation_last_read: targets.accumulation_last_read(accumulate.stage()),
         display: &targets.display,
         samples: held,
     };
@@ -436,12 +437,16 @@ fn sample_range(
 
 /// The images and buffers a frame's passes write, per pixel: the G-buffer (what the accumulation pass reads),
 /// the fixed-point sums (fixed_point.glsl: what makes the total independent of the samples' order and
-/// grouping), and the resolve's float and 8-bit images.
+/// grouping), and the resolve's float and 8-bit images. The float image is the G-buffer's position attachment
+/// where there is a G-buffer: the resolve runs once the last sample has read it (a frame graph's aliasing of a
+/// transient target), which keeps the frame within 100 bytes per pixel with the sums.
 struct FrameTargets {
     gbuffer: GBuffer,
     sums: Buffer,
-    accumulation: Image,
+    /// The reference mode's float image (it has no G-buffer to borrow one from).
+    own_accumulation: Option<Image>,
     display: Image,
+    extent: vk::Extent2D,
     traced: bool,
 }
 
@@ -461,13 +466,36 @@ impl FrameTargets {
             MemoryLocation::GpuOnly,
             16,
         )?;
+        let own_accumulation = if traced {
+            Some(Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?)
+        } else {
+            None
+        };
         Ok(Self {
             gbuffer,
             sums,
-            accumulation: Image::new_2d(device, "accumulation", vk::Format::R32G32B32A32_SFLOAT, extent, storage)?,
+            own_accumulation,
             display: Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?,
+            extent,
             traced,
         })
+    }
+
+    /// The resolve's float image (the linear mean).
+    fn accumulation(&self) -> &Image {
+        match &self.own_accumulation {
+            Some(image) => image,
+            None => &self.gbuffer.color[super::gbuffer_layout::attachment::POSITION],
+        }
+    }
+
+    /// How the accumulation pass last read the float image before the resolve writes it: nothing read the
+    /// reference mode's own; the G-buffer's position was sampled by the accumulation pass at `stage`.
+    fn accumulation_last_read(&self, stage: vk::PipelineStageFlags2) -> Access {
+        match self.own_accumulation {
+            Some(_) => Access::NONE,
+            None => Access { stage, access: Access::SHADER_SAMPLED_READ.access },
+        }
     }
 
     /// What the sums hold once the samples `rendered` are in, on top of `resume`'s: read back for a checkpoint or
@@ -484,15 +512,16 @@ impl FrameTargets {
         if let Some(r) = resume {
             samples = r.samples.union(&samples)?;
         }
-        let vk::Extent2D { width, height } = self.accumulation.extent;
+        let vk::Extent2D { width, height } = self.extent;
         Ok(crate::partial::PartialSums { width, height, spp, samples, counts })
     }
 
-    /// Bytes of the per-pixel images: G-buffer (none in the reference mode), accumulation, display, sums.
+    /// Bytes of the per-pixel images: G-buffer (none in the reference mode) or the float image, display, sums.
     fn image_bytes(&self) -> u64 {
-        let gbuffer = if self.traced { 0 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
-        let extent = self.accumulation.extent;
-        u64::from(extent.width) * u64::from(extent.height) * (gbuffer + 16 + 4 + crate::partial::BYTES_PER_PIXEL)
+        let gbuffer_or_float = if self.traced { 16 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
+        u64::from(self.extent.width)
+            * u64::from(self.extent.height)
+            * (gbuffer_or_float + 4 + crate::partial::BYTES_PER_PIXEL)
     }
 }
 

@@ -2,7 +2,7 @@
 //! attachments of `gbuffer_layout` with dynamic rendering; the fragment shader evaluates the material and the
 //! Blinn bump-mapped normal. One pipeline draws every material: materials in a storage buffer, textures in a
 //! combined-image-sampler array indexed per material.
-use super::gbuffer_layout::{GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT, IDS};
+use super::gbuffer_layout::{attachment, GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT};
 use super::gpu_scene::GpuScene;
 use super::textures::GpuTextures;
 use crate::math::lens::CameraSample;
@@ -33,7 +33,13 @@ impl GBuffer {
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
         let color = ATTACHMENTS
             .iter()
-            .map(|a| Image::new_2d(device, &format!("gbuffer {}", a.name), a.format, extent, usage))
+            .enumerate()
+            .map(|(i, a)| {
+                // Once a frame's samples are in, the resolve writes the linear mean over the position
+                // (FrameTargets): the one attachment of its format, and dead by then.
+                let usage = if i == attachment::POSITION { usage | vk::ImageUsageFlags::STORAGE } else { usage };
+                Image::new_2d(device, &format!("gbuffer {}", a.name), a.format, extent, usage)
+            })
             .collect::<Result<Vec<_>>>()?;
         let depth = Image::new_2d(
             device,
@@ -51,7 +57,7 @@ impl GBuffer {
 pub struct GBufferFrame {
     pub width: u32,
     pub height: u32,
-    /// Per attachment except `ids`, as linear RGBA floats (the sRGB ones, albedo and specular colour, decoded).
+    /// Per channel (`gbuffer_layout::{POSITION, SHADING_NORMAL, ...}`), decoded to linear RGBA floats.
     pub channels: Vec<Vec<[f32; 4]>>,
     /// (instance + 1, material); (0, _) where nothing was drawn.
     pub ids: Vec<[u32; 2]>,
@@ -270,7 +276,7 @@ impl GBufferPass {
                 .iter()
                 .enumerate()
                 .map(|(i, image)| {
-                    let clear = if i == IDS {
+                    let clear = if i == attachment::SURFACE_IDS {
                         vk::ClearColorValue { uint32: [0; 4] }
                     } else {
                         vk::ClearColorValue { float32: [0.0; 4] }
@@ -360,16 +366,27 @@ impl GBufferPass {
             self.record(cmd, gbuffer, inputs, 0, sample, Access::NONE);
             Ok(())
         })?;
-        let mut channels = Vec::new();
-        let mut ids = Vec::new();
+        let mut floats = Vec::new();
+        let mut surface_ids = Vec::new();
         for (i, image) in gbuffer.color.iter().enumerate() {
             let readback =
                 read_image(device, image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE)?;
-            if i == IDS {
-                ids = readback.to_uvec2()?;
+            if i == attachment::SURFACE_IDS {
+                surface_ids = readback.to_uvec4()?;
             } else {
-                channels.push(readback.to_rgba_f32()?);
+                floats.push(readback.to_rgba_f32()?);
             }
+        }
+        let mut channels: Vec<Vec<[f32; 4]>> =
+            (0..super::gbuffer_layout::CHANNELS).map(|_| Vec::with_capacity(surface_ids.len())).collect();
+        let mut ids = Vec::with_capacity(surface_ids.len());
+        for (pixel, surface) in surface_ids.iter().enumerate() {
+            let texel: Vec<[f32; 4]> = floats.iter().map(|f| f[pixel]).collect();
+            let (decoded, pixel_ids) = super::gbuffer_encoding::decode_texel(&texel, *surface);
+            for (channel, value) in channels.iter_mut().zip(decoded) {
+                channel.push(value);
+            }
+            ids.push(pixel_ids);
         }
         Ok(GBufferFrame { width: gbuffer.extent.width, height: gbuffer.extent.height, channels, ids })
     }

@@ -4,35 +4,52 @@ use crate::scene::{AlphaMode, BumpDerivative, BumpMap, Material, NoiseKind};
 use ash::vk;
 use glam::{Mat3, Mat4, Vec4};
 
-/// One colour attachment: its debug name and format. World position is stored, not reconstructed from depth:
-/// the accumulation pass starts rays there and needs full precision, and each sample has its own sheared,
-/// jittered projection that reconstruction would have to replay.
+/// One colour attachment: its debug name and format. What each holds and how is gbuffer_encoding.glsl's (Rust's
+/// twin: `render::gbuffer_encoding`). World position is stored, not reconstructed from depth: the accumulation
+/// pass starts rays there and needs full precision, and each sample has its own sheared, jittered projection that
+/// reconstruction would have to replay.
 pub struct Attachment {
     pub name: &'static str,
     pub format: vk::Format,
 }
 
-pub const ATTACHMENTS: [Attachment; 8] = [
+/// The colour attachments at their locations (`GBUFFER_ATTACHMENT_*` in shared_constants.glsl, the one
+/// definition of both sides; the unit test below holds this order to it).
+pub const ATTACHMENTS: [Attachment; 6] = [
     Attachment { name: "position", format: vk::Format::R32G32B32A32_SFLOAT },
-    Attachment { name: "shading normal", format: vk::Format::R32G32B32A32_SFLOAT },
-    Attachment { name: "geometric normal", format: vk::Format::R16G16B16A16_SFLOAT },
     Attachment { name: "albedo", format: vk::Format::R8G8B8A8_SRGB },
     Attachment { name: "material", format: vk::Format::R8G8B8A8_UNORM },
     Attachment { name: "emission", format: vk::Format::R16G16B16A16_SFLOAT },
     // The specular colour texture's texel (1 without one): the material's factor, which may exceed 1, is
     // applied where the G-buffer is read.
-    Attachment { name: "specular colour", format: vk::Format::R8G8B8A8_SRGB },
-    Attachment { name: "ids", format: vk::Format::R32G32_UINT },
+    Attachment { name: "specular", format: vk::Format::R8G8B8A8_SRGB },
+    Attachment { name: "surface ids", format: vk::Format::R32G32B32A32_UINT },
 ];
+
+/// Attachment locations, from shared_constants.glsl.
+pub mod attachment {
+    use crate::shaders::constants as c;
+    pub const POSITION: usize = c::GBUFFER_ATTACHMENT_POSITION as usize;
+    pub const ALBEDO: usize = c::GBUFFER_ATTACHMENT_ALBEDO as usize;
+    pub const MATERIAL: usize = c::GBUFFER_ATTACHMENT_MATERIAL as usize;
+    pub const EMISSION: usize = c::GBUFFER_ATTACHMENT_EMISSION as usize;
+    pub const SPECULAR: usize = c::GBUFFER_ATTACHMENT_SPECULAR as usize;
+    /// Last, so that the float attachments keep their locations as indices of the accumulation pass's sampler
+    /// array.
+    pub const SURFACE_IDS: usize = c::GBUFFER_ATTACHMENT_SURFACE_IDS as usize;
+}
+
+/// The decoded channels of a read-back G-buffer (`GBufferFrame::at`), each as RGBA floats.
 pub const POSITION: usize = 0;
+/// xyz the bumped normal, w the bump height B(u, v).
 pub const SHADING_NORMAL: usize = 1;
+/// xyz the face normal, w the specular factor.
 pub const GEOMETRIC_NORMAL: usize = 2;
 pub const ALBEDO: usize = 3;
 pub const MATERIAL: usize = 4;
 pub const EMISSION: usize = 5;
 pub const SPECULAR_COLOR: usize = 6;
-/// Last, so that the other attachments keep their indices in the accumulation pass's sampler array.
-pub const IDS: usize = 7;
+pub const CHANNELS: usize = 7;
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// Bytes per pixel of the G-buffer, depth included (for the memory budget).
@@ -278,8 +295,25 @@ mod tests {
     }
 
     #[test]
+    fn each_attachment_sits_at_the_location_shared_constants_give_it() {
+        use super::attachment as a;
+        let named = [
+            (a::POSITION, "position"),
+            (a::ALBEDO, "albedo"),
+            (a::MATERIAL, "material"),
+            (a::EMISSION, "emission"),
+            (a::SPECULAR, "specular"),
+            (a::SURFACE_IDS, "surface ids"),
+        ];
+        for (location, name) in named {
+            assert_eq!(ATTACHMENTS[location].name, name);
+        }
+        assert_eq!(a::SURFACE_IDS, ATTACHMENTS.len() - 1, "the surface ids come last");
+    }
+
+    #[test]
     fn the_gbuffer_fits_its_memory_budget() {
-        // Issue 5's budget is 100 bytes per pixel in all; the G-buffer takes 72 of them.
-        assert_eq!(bytes_per_pixel(), 72);
+        // Issue 30's budget is 100 bytes per pixel with the sums; the G-buffer takes 56 of them.
+        assert_eq!(bytes_per_pixel(), 56);
     }
 }

@@ -6,6 +6,7 @@ pub mod aov;
 pub mod environment;
 pub mod frame;
 pub mod gbuffer;
+pub mod gbuffer_encoding;
 pub mod gbuffer_layout;
 pub mod gpu_scene;
 pub mod lights;

@@ -123,7 +123,13 @@ pub fn resolve_sums(
     let pass = ResolvePass::new(device)?;
     let set = pass.descriptor_set(&upload, &accumulation, &display)?;
     let held = sums.samples.len();
-    let images = ResolvedImages { set: &set, accumulation: &accumulation, display: &display, samples: held };
+    let images = ResolvedImages {
+        set: &set,
+        accumulation: &accumulation,
+        accumulation_last_read: crate::vk::commands::Access::NONE,
+        display: &display,
+        samples: held,
+    };
     submit_and_wait(device, "resolve sums", |cmd| {
         pass.record_fresh(cmd, &images, &look);
         Ok(())
@@ -136,6 +142,9 @@ pub struct ResolvedImages<'a> {
     pub set: &'a DescriptorSet,
     /// The linear mean, in `GENERAL`, last written by the resolve.
     pub accumulation: &'a Image,
+    /// How the float image was read before the resolve (its old contents are discarded either way): a frame's
+    /// resolve writes over the G-buffer's position, which the accumulation pass sampled.
+    pub accumulation_last_read: crate::vk::commands::Access,
     /// The display picture, in `GENERAL`, last written by the resolve.
     pub display: &'a Image,
     /// The sample count the resolve divided by.
@@ -146,12 +155,13 @@ impl ResolvePass {
     /// Records the resolve into images whose old contents do not matter (both go to `GENERAL`).
     pub fn record_fresh(&self, cmd: vk::CommandBuffer, images: &ResolvedImages<'_>, look: &DisplayLook) {
         use crate::vk::commands::{image_barrier, Access};
-        for image in [images.display, images.accumulation] {
+        for (image, last_read) in [(images.display, Access::NONE), (images.accumulation, images.accumulation_last_read)]
+        {
             image_barrier(
                 &self.device,
                 cmd,
                 image,
-                (vk::ImageLayout::UNDEFINED, Access::NONE),
+                (vk::ImageLayout::UNDEFINED, last_read),
                 (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
             );
         }
@@ -171,7 +181,7 @@ impl ResolvePass {
         use crate::vk::commands::{image_barrier, submit_and_wait, Access};
         use crate::vk::readback::read_image;
         let device = &self.device;
-        let ResolvedImages { set, accumulation, display, samples } = *images;
+        let ResolvedImages { set, accumulation, display, samples, .. } = *images;
         let linear = read_image(device, accumulation, vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE)?;
         let extent = accumulation.extent;
         let linear = crate::output::Frame::new(extent.width, extent.height, linear.to_rgba_f32()?)?;

@@ -52,11 +52,11 @@ impl Readback {
         }
     }
 
-    /// Every texel of an `R32G32_UINT` image, row-major.
-    pub fn to_uvec2(&self) -> Result<Vec<[u32; 2]>> {
+    /// Every texel of an `R32G32B32A32_UINT` image, row-major.
+    pub fn to_uvec4(&self) -> Result<Vec<[u32; 4]>> {
         match self.format {
-            vk::Format::R32G32_UINT => Ok(bytemuck::pod_collect_to_vec(&self.bytes)),
-            other => Err(anyhow!("cannot read {other:?} texels as two unsigned integers")),
+            vk::Format::R32G32B32A32_UINT => Ok(bytemuck::pod_collect_to_vec(&self.bytes)),
+            other => Err(anyhow!("cannot read {other:?} texels as four unsigned integers")),
         }
     }
 }
