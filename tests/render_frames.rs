@@ -398,6 +398,31 @@ fn a_second_frame_on_one_device_reuses_the_compute_pipelines_and_matches_the_fir
 
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
 /// with a sane interval, shadow rays flagged to end at their first hit; and logging leaves the picture untouched.
+/// A frame's device memory beyond the scene: at most 100 bytes per pixel with the 32 of the fixed-point sums
+/// (issue 30), in both primary modes. (In the raster mode the resolve writes its linear mean over the G-buffer's
+/// position attachment; tests/scale_out.rs holds that picture to the one a merge resolves into images of its
+/// own, byte for byte.)
+#[test]
+fn a_frame_holds_at_most_100_bytes_per_pixel_with_its_sums() {
+    use strata::render::frame::{render_frame, FrameOptions};
+    let gpu = GpuTest::new();
+    let device = gpu.device();
+    let scene = load(&repo("scenes/cornell.toml"));
+    let on_gpu = strata::render::SceneOnGpu::upload(device, &scene).unwrap();
+    let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
+    let (width, height) = (192, 128);
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(width, height, 2, SamplerKind::MultiJittered) };
+        let frame = render_frame(device, &scene, &on_gpu, &s, &FrameOptions::default(), &mut |_, _| true).unwrap();
+        let per_pixel = (frame.stats.device_bytes - scene_bytes) as f64 / f64::from(width * height);
+        assert!(per_pixel <= 100.0, "{primary:?}: {per_pixel:.1} bytes per pixel");
+        // Not vacuous: the images alone are most of it.
+        assert!(per_pixel >= 52.0, "{primary:?}: {per_pixel:.1} bytes per pixel is less than the images hold");
+    }
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
 #[test]
 fn the_ray_log_holds_every_ray_the_pass_casts_and_only_observes() {
     use strata::render::frame::{render_frame, FrameOptions};
