@@ -287,6 +287,15 @@ pub struct RenderArgs {
 }
 
 impl RenderArgs {
+    /// What the command line says of the camera (None where it is silent): laid over the scene's.
+    pub fn camera_overrides(&self) -> strata::scene::settings::CameraOverrides {
+        strata::scene::settings::CameraOverrides {
+            aperture_radius: self.aperture,
+            focus_distance: self.focus,
+            shutter: self.shutter,
+        }
+    }
+
     /// What the command line says of the render settings (None where it is silent): laid over the defaults and
     /// the scene file's.
     pub fn overrides(&self) -> strata::scene::settings::SettingsOverrides {

@@ -174,22 +174,30 @@ fn check_scene_plan(
     plan.check(&|a, b| matches!((a, b), ("--checkpoint", "--resume") | ("--resume", "--checkpoint")))
 }
 
-/// One scene: load, frame, render its frame or frames, write them. With `several`, outputs are written as each
-/// frame finishes and the device stays for the next scene.
-fn render_scene(
-    args: &RenderArgs,
-    scene_path: &std::path::Path,
-    gpu_slot: &mut Option<Gpu>,
-    several: bool,
-) -> Result<()> {
-    use std::io::IsTerminal as _;
-    use std::sync::atomic::Ordering;
+/// What one scene renders, once loaded and checked: its settings and camera framing, the frames of this shard,
+/// the files they write.
+struct SceneJob {
+    scene: strata::scene::Scene,
+    settings: strata::scene::settings::RenderSettings,
+    framing: Framing,
+    /// The scene's lens, kept when a framing replaces the camera.
+    lens: Option<strata::scene::camera::Lens>,
+    plans: Vec<sequence::FramePlan>,
+    /// A single frame's share of the samples (--samples, --shard, --checkpoint, --resume), if any.
+    part_plan: Option<FramePart>,
+    output: std::path::PathBuf,
+    exr_output: Option<std::path::PathBuf>,
+}
+
+/// Loads a scene and lays the command line over it (defaults, then the scene file, then the command line);
+/// checks every output name and the files the run writes, reads and removes before any work. None: this shard
+/// has nothing to do.
+fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Option<SceneJob>> {
     let options = strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true) };
     let loaded = strata::load(scene_path, &options)?;
     for warning in &loaded.scene.warnings {
         eprintln!("warning: {}: {warning}", scene_path.display());
     }
-    // Defaults, then the scene file, then the command line.
     let mut settings =
         strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&args.overrides());
     settings.auto_exposure = args.exposure == Some(ExposureArg::Auto);
@@ -214,13 +222,9 @@ fn render_scene(
         Some(camera) => scene.camera = Some(camera),
         None => apply_yfov(&mut scene, args.yfov),
     }
-    strata::scene::settings::CameraOverrides {
-        aperture_radius: args.aperture,
-        focus_distance: args.focus,
-        shutter: args.shutter,
-    }
-    .apply(&mut scene)
-    .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
+    args.camera_overrides()
+        .apply(&mut scene)
+        .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
     let lens = scene.camera.as_ref().map(|c| c.lens);
     let every_frame = sequence::plan(sequence, args.fps, args.shutter_angle);
     // One frame splits its samples; a sequence (even one whose shard holds a single frame) splits its frames.
@@ -228,153 +232,161 @@ fn render_scene(
     let plans = scale_out::frames_of_shard(args, every_frame)?;
     if plans.is_empty() {
         eprintln!("strata: this shard has no frames (more shards than frames); nothing to do");
-        return Ok(());
+        return Ok(None);
     }
     // What the run writes, reads and removes, as files, before anything is read from a checkpoint or rendered.
     check_scene_plan(args, &plans, &output, exr_output.as_deref())?;
     let part_plan = if one_frame && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
     if part_plan.as_ref().is_some_and(FramePart::is_empty) {
-        return Ok(());
+        return Ok(None);
     }
+    Ok(Some(SceneJob { scene, settings, framing, lens, plans, part_plan, output, exr_output }))
+}
+
+/// One scene: load, frame, render its frame or frames, write them. A single frame is written once the device's
+/// teardown has passed the layer; with `several` scenes or a sequence, each frame as it finishes (an interrupted
+/// run keeps every finished frame) and the device stays for the next.
+fn render_scene(
+    args: &RenderArgs,
+    scene_path: &std::path::Path,
+    gpu_slot: &mut Option<Gpu>,
+    several: bool,
+) -> Result<()> {
+    use std::sync::atomic::Ordering;
+    let Some(mut job) = prepare_scene(args, scene_path)? else {
+        return Ok(());
+    };
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
+        let trace = if several { args.trace.unwrap_or_default() } else { job.settings.trace };
         *gpu_slot = Some(Gpu::new(&GpuOptions {
             validation: args.gpu.validate,
             echo_messages: args.gpu.validate,
             device: args.gpu.device.clone(),
-            needs: strata::render::accumulate::TracePath::device_needs(if several {
-                args.trace.unwrap_or_default()
-            } else {
-                settings.trace
-            }),
+            needs: strata::render::accumulate::TracePath::device_needs(trace),
         })?);
     }
     let gpu = gpu_slot.as_ref().expect("made above");
     let log = gpu.validation_log();
+    let check_log = || if args.gpu.validate { log.check().map_err(|report| anyhow!("{report}")) } else { Ok(()) };
     // Geometry, textures and the environment go up once for every frame and pass of this run.
-    let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &scene)?;
-    let show_progress = !args.quiet && std::io::stderr().is_terminal();
+    let on_gpu = strata::render::SceneOnGpu::upload(&gpu.device, &job.scene)?;
+    let single = job.plans.len() == 1 && !several;
     let mut finished: Vec<String> = Vec::new();
-    for (k, plan) in plans.iter().enumerate() {
+    for (k, plan) in job.plans.iter().enumerate() {
         if INTERRUPTED.load(Ordering::SeqCst) {
-            return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
+            return interrupted(finished, job.plans.len(), on_gpu, gpu_slot.take());
         }
         // This frame's camera and shutter; everything else stays as uploaded.
-        if let Some(camera) = framing.camera(plan.theta_degrees) {
-            scene.camera = Some(strata::scene::Camera { lens: lens.unwrap_or(camera.lens), ..camera });
+        if let Some(camera) = job.framing.camera(plan.theta_degrees) {
+            job.scene.camera = Some(strata::scene::Camera { lens: job.lens.unwrap_or(camera.lens), ..camera });
         }
         if let Some(shutter) = plan.shutter {
-            scene.shutter = shutter;
+            job.scene.shutter = shutter;
         }
         let (output, exr) = match plan.number {
-            Some(n) => (sequence::numbered(&output, n), exr_output.as_ref().map(|e| sequence::numbered(e, n))),
-            None => (output.clone(), exr_output.clone()),
+            Some(n) => (sequence::numbered(&job.output, n), job.exr_output.as_ref().map(|e| sequence::numbered(e, n))),
+            None => (job.output.clone(), job.exr_output.clone()),
         };
-        if plans.len() > 1 && !args.quiet {
-            eprintln!("strata: frame {} of {} ({})", k + 1, plans.len(), output.display());
+        if job.plans.len() > 1 && !args.quiet {
+            eprintln!("strata: frame {} of {} ({})", k + 1, job.plans.len(), output.display());
         }
         let frame_started = std::time::Instant::now();
-        let mut bar = ProgressBar::new(show_progress);
-        let mut part_out: Option<strata::partial::file::Part> = None;
-        let picture = if args.preview {
-            let preview = strata::render::PreviewSettings {
-                width: settings.width,
-                height: settings.height,
-                background: settings.background.to_array(),
-            };
-            Picture::Preview(strata::render_preview(gpu, &scene, &on_gpu, &preview)?)
-        } else {
-            let mut progress = |done: u32, total: u32| {
-                bar.update(done, total);
-                !INTERRUPTED.load(Ordering::SeqCst)
-            };
-            let rendered = match &part_plan {
-                None => {
-                    let frame_options = strata::render::frame::FrameOptions::default();
-                    strata::render(gpu, &scene, &on_gpu, &settings, &frame_options, &mut progress).map(|r| (r, None))
-                }
-                Some(plan) => plan.render(gpu, &scene, &on_gpu, &settings, &mut progress),
-            };
-            bar.finish();
-            match rendered {
-                Ok((r, part)) => {
-                    part_out = part;
-                    Picture::Rendered(Box::new(r))
-                }
-                Err(e)
-                    if e.downcast_ref::<strata::render::frame::Interrupted>().is_some()
-                        && part_plan.as_ref().and_then(|p| p.checkpoint()).is_some() =>
-                {
-                    let plan = part_plan.as_ref().expect("matched");
-                    let checkpoint = plan.checkpoint().expect("matched");
+        let (picture, part) = match render_picture(args, gpu, &job, &on_gpu)? {
+            Some(rendered) => rendered,
+            None => {
+                // Interrupted: a checkpoint keeps the samples so far, a sequence its finished frames.
+                if let Some(plan) = job.part_plan.as_ref().filter(|p| p.checkpoint().is_some()) {
+                    let checkpoint = plan.checkpoint().expect("filtered");
                     return stopped_with_checkpoint(checkpoint, plan.last_save_failed(), on_gpu, gpu_slot.take());
                 }
-                Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() && !finished.is_empty() => {
-                    return interrupted(finished, plans.len(), on_gpu, gpu_slot.take());
+                if !finished.is_empty() {
+                    return interrupted(finished, job.plans.len(), on_gpu, gpu_slot.take());
                 }
-                Err(e) => return Err(e),
+                return Err(strata::render::frame::Interrupted.into());
             }
         };
         let aovs = match &args.aov {
-            Some(list) => strata::render_aovs(gpu, &scene, &on_gpu, settings.width, settings.height, &list.0)?,
+            Some(list) => {
+                let (width, height) = (job.settings.width, job.settings.height);
+                strata::render_aovs(gpu, &job.scene, &on_gpu, width, height, &list.0)?
+            }
             None => Vec::new(),
         };
-        if args.gpu.validate {
-            // What the layer said so far; teardown messages are checked once the device is gone.
-            log.check().map_err(|report| anyhow!("{report}"))?;
-        }
-        // A single frame is written after the device's teardown passed the layer; a sequence's frames as they
-        // finish, so that an interrupted run keeps every finished frame.
-        if plans.len() == 1 && !several {
-            let device_name = gpu.device.report.name.clone();
+        // What the layer said so far; teardown messages are checked once the device is gone.
+        check_log()?;
+        let device_name = gpu.device.report.name.clone();
+        let written = FrameReport {
+            output: &output,
+            exr: exr.as_deref(),
+            seconds: if single { started } else { frame_started }.elapsed().as_secs_f64(),
+            device: device_name,
+            part: None,
+        };
+        if single {
             drop(on_gpu);
             drop(gpu_slot.take());
-            if args.gpu.validate {
-                log.check().map_err(|report| anyhow!("{report}"))?;
-            }
-            match &part_out {
+            check_log()?;
+            match &part {
                 Some(part) => strata::partial::file::write_part(&output, part)?,
                 None => write_picture(&output, exr.as_deref(), &picture, &aovs)?,
             }
-            if let Some(plan) = &part_plan {
+            if let Some(plan) = &job.part_plan {
                 plan.finish()?;
             }
-            report(
-                args,
-                &settings,
-                &scene,
-                &picture,
-                &output,
-                exr.as_deref(),
-                started.elapsed().as_secs_f64(),
-                device_name,
-                part_plan.as_ref().filter(|p| p.writes_part).map(FramePart::target),
-            );
+            let part = job.part_plan.as_ref().filter(|p| p.writes_part).map(FramePart::target);
+            report(args, &job.settings, &job.scene, &picture, FrameReport { part, ..written });
             return Ok(());
         }
         write_picture(&output, exr.as_deref(), &picture, &aovs)?;
         finished.push(output.display().to_string());
-        let device_name = gpu.device.report.name.clone();
-        report(
-            args,
-            &settings,
-            &scene,
-            &picture,
-            &output,
-            exr.as_deref(),
-            frame_started.elapsed().as_secs_f64(),
-            device_name,
-            None,
-        );
+        report(args, &job.settings, &job.scene, &picture, written);
     }
     drop(on_gpu);
-    if args.gpu.validate {
-        log.check().map_err(|report| anyhow!("{report}"))?;
-    }
-    if plans.len() > 1 && !args.quiet {
+    check_log()?;
+    if job.plans.len() > 1 && !args.quiet {
         eprintln!("strata: {} frames in {:.1} s", finished.len(), started.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// One frame's picture: the preview, or the render (of the part `job.part_plan` asks for, with the part it
+/// makes), with a progress bar on a terminal. None: Ctrl-C or SIGTERM stopped it.
+fn render_picture(
+    args: &RenderArgs,
+    gpu: &Gpu,
+    job: &SceneJob,
+    on_gpu: &strata::render::SceneOnGpu,
+) -> Result<Option<(Picture, Option<strata::partial::file::Part>)>> {
+    use std::io::IsTerminal as _;
+    use std::sync::atomic::Ordering;
+    let (scene, settings) = (&job.scene, &job.settings);
+    if args.preview {
+        let preview = strata::render::PreviewSettings {
+            width: settings.width,
+            height: settings.height,
+            background: settings.background.to_array(),
+        };
+        return Ok(Some((Picture::Preview(strata::render_preview(gpu, scene, on_gpu, &preview)?), None)));
+    }
+    let mut bar = ProgressBar::new(!args.quiet && std::io::stderr().is_terminal());
+    let mut progress = |done: u32, total: u32| {
+        bar.update(done, total);
+        !INTERRUPTED.load(Ordering::SeqCst)
+    };
+    let rendered = match &job.part_plan {
+        None => {
+            let frame_options = strata::render::frame::FrameOptions::default();
+            strata::render(gpu, scene, on_gpu, settings, &frame_options, &mut progress).map(|r| (r, None))
+        }
+        Some(plan) => plan.render(gpu, scene, on_gpu, settings, &mut progress),
+    };
+    bar.finish();
+    match rendered {
+        Ok((r, part)) => Ok(Some((Picture::Rendered(Box::new(r)), part))),
+        Err(e) if e.downcast_ref::<strata::render::frame::Interrupted>().is_some() => Ok(None),
+        Err(e) => Err(e),
+    }
 }
 
 /// The environment the command line names (with its rotation and intensity), and a default key light for a scene
@@ -552,17 +564,24 @@ fn apply_yfov(scene: &mut strata::scene::Scene, degrees: Option<f32>) {
 
 /// The summary line (and JSON) of one written frame.
 #[allow(clippy::too_many_arguments)]
+/// What one finished frame wrote, for its summary line.
+struct FrameReport<'a> {
+    output: &'a std::path::Path,
+    exr: Option<&'a std::path::Path>,
+    seconds: f64,
+    device: String,
+    /// The samples of the frame a part holds, when the run wrote a part.
+    part: Option<(u32, u32)>,
+}
+
 fn report(
     args: &RenderArgs,
     settings: &strata::scene::settings::RenderSettings,
     scene: &strata::scene::Scene,
     picture: &Picture,
-    output: &std::path::Path,
-    exr: Option<&std::path::Path>,
-    seconds: f64,
-    device: String,
-    part: Option<(u32, u32)>,
+    frame: FrameReport<'_>,
 ) {
+    let FrameReport { output, exr, seconds, device, part } = frame;
     let mut written = vec![output.display().to_string()];
     written.extend(exr.map(|p| p.display().to_string()));
     let summary = Summary {
