@@ -183,39 +183,111 @@ pub fn run(options: &RunOptions, progress: &mut dyn FnMut(usize, usize, &CaseRes
         goldens.writable_dir()?;
     }
     let environment = environment(options, &goldens)?;
-    let facts = environment.facts();
     let selected = select_cases(options);
     if selected.is_empty() {
         bail!("no case matches (strata check --list shows them)");
     }
-    // Blessing runs the cases that make goldens first, so the canaries compare against the new ones.
-    let mut order: Vec<usize> = (0..selected.len()).collect();
-    if options.bless {
-        order.sort_by_key(|&i| !matches!(selected[i].kind, Kind::Golden | Kind::Aov));
-    }
-    let mut results: Vec<Option<CaseResult>> = vec![None; selected.len()];
-    let mut pending: std::collections::VecDeque<(usize, u32)> = order.iter().map(|&i| (i, 1)).collect();
-    let mut first_attempt: Vec<Option<(Status, CaseReport)>> = vec![None; selected.len()];
+    let mut schedule = Schedule::new(options, &selected, environment.facts());
     let mut running: Vec<Running> = Vec::new();
-    let mut used_allows: BTreeSet<String> = BTreeSet::new();
-    let mut goldens_written = Vec::new();
-    let mut done = 0usize;
-    let total = selected.len();
-    let bless_phase_len =
-        if options.bless { selected.iter().filter(|c| matches!(c.kind, Kind::Golden | Kind::Aov)).count() } else { 0 };
-    let mut blessed = 0usize;
     loop {
-        // Start what may start: in a bless run nothing past the golden-making cases starts before they are done.
+        schedule.start(&mut running, progress)?;
+        if running.is_empty() && schedule.pending.is_empty() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+        let mut i = 0;
+        while i < running.len() {
+            match exit_of(&mut running[i], options.timeout)? {
+                None => i += 1,
+                Some(exit) => schedule.settle(running.swap_remove(i), exit, &mut goldens, progress)?,
+            }
+        }
+    }
+    let facts = environment.facts();
+    let device_allows: Vec<&Allow> = options.expectations.allows.iter().filter(|a| a.devices.matches(&facts)).collect();
+    let unused_allows = device_allows
+        .iter()
+        .filter(|a| !schedule.used_allows.contains(&a.id))
+        .map(|a| format!("{} ({}): allowed but never reported", a.id, a.at))
+        .collect();
+    Ok(RunSummary {
+        environment,
+        results: schedule.results.into_iter().flatten().collect(),
+        unused_allows,
+        goldens_written: schedule.goldens_written,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// How a case's process ended: its exit status, or Err when it ran past `timeout` and was killed. None while it
+/// runs.
+fn exit_of(r: &mut Running, timeout: Duration) -> Result<Option<std::result::Result<std::process::ExitStatus, ()>>> {
+    match r.child.try_wait() {
+        Ok(Some(status)) => Ok(Some(Ok(status))),
+        Ok(None) if r.started.elapsed() > timeout => {
+            let _ = r.child.kill();
+            let _ = r.child.wait();
+            Ok(Some(Err(())))
+        }
+        Ok(None) => Ok(None),
+        Err(e) => Err(e).context("waiting for a case's process"),
+    }
+}
+
+/// The cases of one run in their order: what waits (with its attempt), what a first attempt said before its
+/// re-run, and the results so far.
+struct Schedule<'a> {
+    options: &'a RunOptions,
+    selected: &'a [Case],
+    facts: DeviceFacts,
+    pending: std::collections::VecDeque<(usize, u32)>,
+    first_attempt: Vec<Option<(Status, CaseReport)>>,
+    results: Vec<Option<CaseResult>>,
+    used_allows: BTreeSet<String>,
+    goldens_written: Vec<String>,
+    done: usize,
+    /// Golden-making cases finished, and how many there are in a bless run (0 otherwise).
+    blessed: usize,
+    bless_phase_len: usize,
+}
+
+impl<'a> Schedule<'a> {
+    fn new(options: &'a RunOptions, selected: &'a [Case], facts: DeviceFacts) -> Self {
+        // Blessing runs the cases that make goldens first, so the canaries compare against the new ones.
+        let mut order: Vec<usize> = (0..selected.len()).collect();
+        if options.bless {
+            order.sort_by_key(|&i| !makes_goldens(&selected[i]));
+        }
+        let bless_phase_len = if options.bless { selected.iter().filter(|c| makes_goldens(c)).count() } else { 0 };
+        Self {
+            options,
+            selected,
+            facts,
+            pending: order.iter().map(|&i| (i, 1)).collect(),
+            first_attempt: vec![None; selected.len()],
+            results: vec![None; selected.len()],
+            used_allows: BTreeSet::new(),
+            goldens_written: Vec::new(),
+            done: 0,
+            blessed: 0,
+            bless_phase_len,
+        }
+    }
+
+    /// Starts what may start: up to `--jobs` at once, and in a bless run nothing past the golden-making cases
+    /// before they are done. A case expected to be skipped on this device is settled without a process.
+    fn start(&mut self, running: &mut Vec<Running>, progress: &mut dyn FnMut(usize, usize, &CaseResult)) -> Result<()> {
+        let (options, selected) = (self.options, self.selected);
         while running.len() < options.jobs {
-            let Some(&(index, attempt)) = pending.front() else { break };
-            let is_maker = matches!(selected[index].kind, Kind::Golden | Kind::Aov);
-            if options.bless && !is_maker && attempt == 1 && blessed < bless_phase_len {
+            let Some(&(index, attempt)) = self.pending.front() else { break };
+            let case = &selected[index];
+            if options.bless && !makes_goldens(case) && attempt == 1 && self.blessed < self.bless_phase_len {
                 break;
             }
-            pending.pop_front();
-            let case = &selected[index];
-            if attempt == 1 {
-                if let Some(e) = options.expectations.expected(case.name, &facts).filter(|e| e.status == Status::Skip) {
+            self.pending.pop_front();
+            let skip = options.expectations.expected(case.name, &self.facts).filter(|e| e.status == Status::Skip);
+            match skip {
+                Some(e) if attempt == 1 => {
                     let result = CaseResult {
                         case: case.name.into(),
                         kind: case.kind.name().into(),
@@ -230,127 +302,113 @@ pub fn run(options: &RunOptions, progress: &mut dyn FnMut(usize, usize, &CaseRes
                             ..Default::default()
                         },
                     };
-                    done += 1;
-                    progress(done, total, &result);
-                    results[index] = Some(result);
-                    if is_maker {
-                        blessed += 1;
-                    }
-                    continue;
+                    self.record(index, result, progress);
                 }
+                _ => running.push(spawn(options, case, index, attempt)?),
             }
-            running.push(spawn(options, case, index, attempt)?);
         }
-        if running.is_empty() && pending.is_empty() {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-        let mut i = 0;
-        while i < running.len() {
-            let finished = match running[i].child.try_wait() {
-                Ok(Some(status)) => Some(Ok(status)),
-                Ok(None) if running[i].started.elapsed() > options.timeout => {
-                    let _ = running[i].child.kill();
-                    let _ = running[i].child.wait();
-                    Some(Err(()))
-                }
-                Ok(None) => None,
-                Err(e) => return Err(e).context("waiting for a case's process"),
-            };
-            let Some(exit) = finished else {
-                i += 1;
-                continue;
-            };
-            let r = running.swap_remove(i);
-            let case = &selected[r.index];
-            let dir = case_dir(&options.out, case.name);
-            let seconds = r.started.elapsed().as_secs_f64();
-            let (raw, mut report) = match exit {
-                Err(()) => (
-                    Status::Timeout,
-                    CaseReport {
-                        case: case.name.into(),
-                        message: format!("killed after {:.0} s (--timeout)", options.timeout.as_secs_f64()),
-                        seconds,
-                        ..Default::default()
-                    },
-                ),
-                Ok(status) => read_child_result(&dir, case.name, status, seconds),
-            };
-            // The whole child: starting, opening the device, building pipelines, the case, the teardown.
-            report.seconds = seconds;
-            let raw = apply_validation(raw, &mut report, &options.expectations, &facts, &mut used_allows);
-            let expected = options.expectations.expected(case.name, &facts);
-            // An unexpected failure gets one more try; a pass then is a flake.
-            if r.attempt == 1 && matches!(raw, Status::Fail | Status::Crash | Status::Timeout) && expected.is_none() {
-                first_attempt[r.index] = Some((raw, report));
-                pending.push_front((r.index, 2));
-                continue;
-            }
-            let (raw, report, attempts) = match first_attempt[r.index].take() {
-                Some((first_status, first_report)) if raw == Status::Pass => {
-                    let mut report = report;
-                    report.message = format!(
-                        "passed on the re-run after {first_status} on the first ({}); see {}",
-                        first_report.message,
-                        dir.join("attempt-1.json").display()
-                    );
-                    let _ = std::fs::write(dir.join("attempt-1.json"), serde_json::to_vec_pretty(&first_report)?);
-                    (Status::Flake, report, 2)
-                }
-                Some((first_status, first_report)) => (first_status, first_report, 2),
-                None => (raw, report, r.attempt),
-            };
-            let status = expectations::apply(raw, expected);
-            let mut result = CaseResult {
-                case: case.name.into(),
-                kind: case.kind.name().into(),
-                about: case.about.into(),
-                status,
-                raw,
-                attempts,
-                expected: expected.map(|e| (e.status, e.reason.clone(), e.at.clone())),
-                report,
-            };
-            if options.bless && !result.report.bless.is_empty() && raw != Status::Crash && raw != Status::Timeout {
-                let written = bless(&mut goldens, &dir, &mut result)?;
-                goldens_written.extend(written);
-            }
-            if options.calibrate {
-                if let Some([mean, p99]) = result.report.proposed_thresholds {
-                    let entry = goldens.entries.entry(result.case.clone()).or_default();
-                    entry.flip_mean = Some(round_up(mean));
-                    entry.flip_p99 = Some(round_up(p99));
-                    goldens.save()?;
-                    goldens_written.push(format!(
-                        "{}: thresholds FLIP mean {}, 99th percentile {}",
-                        result.case,
-                        round_up(mean),
-                        round_up(p99)
-                    ));
-                }
-            }
-            if matches!(case.kind, Kind::Golden | Kind::Aov) {
-                blessed += 1;
-            }
-            done += 1;
-            progress(done, total, &result);
-            results[r.index] = Some(result);
-        }
+        Ok(())
     }
-    let device_allows: Vec<&Allow> = options.expectations.allows.iter().filter(|a| a.devices.matches(&facts)).collect();
-    let unused_allows = device_allows
-        .iter()
-        .filter(|a| !used_allows.contains(&a.id))
-        .map(|a| format!("{} ({}): allowed but never reported", a.id, a.at))
-        .collect();
-    Ok(RunSummary {
-        environment,
-        results: results.into_iter().flatten().collect(),
-        unused_allows,
-        goldens_written,
-        seconds: started.elapsed().as_secs_f64(),
-    })
+
+    /// A case's process ended: read its result, give an unexpected failure one more try (a pass then is a
+    /// flake), apply the expectations, bless or calibrate when asked, and record it.
+    fn settle(
+        &mut self,
+        r: Running,
+        exit: std::result::Result<std::process::ExitStatus, ()>,
+        goldens: &mut Goldens,
+        progress: &mut dyn FnMut(usize, usize, &CaseResult),
+    ) -> Result<()> {
+        let (options, selected) = (self.options, self.selected);
+        let case = &selected[r.index];
+        let dir = case_dir(&options.out, case.name);
+        let seconds = r.started.elapsed().as_secs_f64();
+        let (raw, mut report) = match exit {
+            Err(()) => (
+                Status::Timeout,
+                CaseReport {
+                    case: case.name.into(),
+                    message: format!("killed after {:.0} s (--timeout)", options.timeout.as_secs_f64()),
+                    seconds,
+                    ..Default::default()
+                },
+            ),
+            Ok(status) => read_child_result(&dir, case.name, status, seconds),
+        };
+        // The whole child: starting, opening the device, building pipelines, the case, the teardown.
+        report.seconds = seconds;
+        let raw = apply_validation(raw, &mut report, &options.expectations, &self.facts, &mut self.used_allows);
+        let expected = options.expectations.expected(case.name, &self.facts);
+        if r.attempt == 1 && matches!(raw, Status::Fail | Status::Crash | Status::Timeout) && expected.is_none() {
+            self.first_attempt[r.index] = Some((raw, report));
+            self.pending.push_front((r.index, 2));
+            return Ok(());
+        }
+        let (raw, report, attempts) = match self.first_attempt[r.index].take() {
+            Some((first_status, first_report)) if raw == Status::Pass => {
+                let mut report = report;
+                report.message = format!(
+                    "passed on the re-run after {first_status} on the first ({}); see {}",
+                    first_report.message,
+                    dir.join("attempt-1.json").display()
+                );
+                let _ = std::fs::write(dir.join("attempt-1.json"), serde_json::to_vec_pretty(&first_report)?);
+                (Status::Flake, report, 2)
+            }
+            Some((first_status, first_report)) => (first_status, first_report, 2),
+            None => (raw, report, r.attempt),
+        };
+        let mut result = CaseResult {
+            case: case.name.into(),
+            kind: case.kind.name().into(),
+            about: case.about.into(),
+            status: expectations::apply(raw, expected),
+            raw,
+            attempts,
+            expected: expected.map(|e| (e.status, e.reason.clone(), e.at.clone())),
+            report,
+        };
+        if options.bless && !result.report.bless.is_empty() && raw != Status::Crash && raw != Status::Timeout {
+            let written = bless(goldens, &dir, &mut result)?;
+            self.goldens_written.extend(written);
+        }
+        if options.calibrate {
+            self.calibrate(goldens, &result)?;
+        }
+        self.record(r.index, result, progress);
+        Ok(())
+    }
+
+    /// A golden case's measured spread becomes its perceptual thresholds (`--calibrate`).
+    fn calibrate(&mut self, goldens: &mut Goldens, result: &CaseResult) -> Result<()> {
+        if let Some([mean, p99]) = result.report.proposed_thresholds {
+            let entry = goldens.entries.entry(result.case.clone()).or_default();
+            entry.flip_mean = Some(round_up(mean));
+            entry.flip_p99 = Some(round_up(p99));
+            goldens.save()?;
+            self.goldens_written.push(format!(
+                "{}: thresholds FLIP mean {}, 99th percentile {}",
+                result.case,
+                round_up(mean),
+                round_up(p99)
+            ));
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, index: usize, result: CaseResult, progress: &mut dyn FnMut(usize, usize, &CaseResult)) {
+        if makes_goldens(&self.selected[index]) {
+            self.blessed += 1;
+        }
+        self.done += 1;
+        progress(self.done, self.selected.len(), &result);
+        self.results[index] = Some(result);
+    }
+}
+
+/// Golden and AOV cases make goldens (`--bless`).
+fn makes_goldens(case: &Case) -> bool {
+    matches!(case.kind, Kind::Golden | Kind::Aov)
 }
 
 /// Two significant digits, rounded up: thresholds read as numbers a person wrote.
