@@ -162,11 +162,10 @@ fn bench_scale_out(args: &BenchArgs, gpu: Gpu) -> Result<()> {
 }
 
 fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
-    use strata::bench::{fitted_exponent, time_frame, time_pipeline_creation};
+    use strata::bench::time_pipeline_creation;
     use strata::render::accumulate::TracePath;
-    use strata::scene::settings::{Primary, Trace};
+    use strata::scene::settings::Trace;
     let (w, h) = args.size;
-    let pixels = f64::from(w) * f64::from(h);
     println!(
         "Frames of distributed ray tracing at {w}x{h}, {} spp (jittered), on {}",
         args.spp, gpu.device.report.name
@@ -180,96 +179,132 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         .collect::<Result<_>>()?;
     println!("accumulate pipeline creation (alpha-tested variant, wall clock): {}", creation.join(", "));
     for path in [&args.scene, &args.showcase] {
-        let mut scene = strata::load_scene(path)?;
-        if !scene.has_light() {
-            scene.add_default_light();
-        }
-        eprint!("\r{} ...", path.display());
-        let probe = auto == TracePath::Query;
-        let f = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, auto.as_trace(), probe)?;
-        let traced = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, auto.as_trace(), false)?;
-        // The other ways to trace, both primary modes, for the side-by-side line.
-        let mut by_path = Vec::new();
-        for other in &paths {
-            let (raster, rays) = if *other == auto {
-                (f.stats.clone(), traced.stats.clone())
-            } else {
-                let t = other.as_trace();
-                let raster = time_frame(&gpu, &scene, (w, h), args.spp, Primary::Raster, t, false)?.stats;
-                (raster, time_frame(&gpu, &scene, (w, h), args.spp, Primary::Rays, t, false)?.stats)
-            };
-            by_path.push((*other, raster, rays));
-        }
-        eprint!("\r\x1b[2K");
-        let s = &f.stats;
-        let t = s.pass_times.unwrap_or_default();
-        let n = f64::from(s.samples);
-        let total = t.total_ms();
-        let rays = (s.shadow_rays + s.secondary_rays) as f64;
-        let accumulate_rays_per_s = rays / (t.accumulate_ms / 1e3);
-        let probe_rays_per_s = f.probe_rays as f64 / (f.probe_ms / 1e3);
-        let frame_bytes = s.device_bytes.saturating_sub(f.scene_bytes);
-        println!("{}:", path.display());
-        println!(
-            "  GPU ms per sample: TLAS {:.2}, G-buffer {:.2}, accumulate {:.2}; resolve {:.2} per frame",
-            t.tlas_ms / n,
-            t.gbuffer_ms / n,
-            t.accumulate_ms / n,
-            t.resolve_ms
-        );
-        println!(
-            "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 33.3%)",
-            n / (total / 1e3),
-            s.seconds,
-            100.0 * (t.tlas_ms + t.gbuffer_ms) / total
-        );
-        println!(
-            "  rays per sample {:.0} shadow + {:.0} secondary; {:.2} M shadow rays/s, {:.2} M secondary rays/s",
-            s.shadow_rays as f64 / n,
-            s.secondary_rays as f64 / n,
-            s.shadow_rays as f64 / (t.accumulate_ms / 1e3) / 1e6,
-            s.secondary_rays as f64 / (t.accumulate_ms / 1e3) / 1e6
-        );
-        if probe {
-            println!(
-                "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): \
-                 {:.1}% (target >= 60%)",
-                accumulate_rays_per_s / 1e6,
-                probe_rays_per_s / 1e6,
-                f.probe_rays,
-                100.0 * accumulate_rays_per_s / probe_rays_per_s
-            );
-            let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
-            println!(
-                "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest \
-                 hit), no shading: {:.2} M rays/s, {:.1}%",
-                f.replay_shadow_rays,
-                f.replay_rays - f.replay_shadow_rays,
-                replay_rays_per_s / 1e6,
-                100.0 * accumulate_rays_per_s / replay_rays_per_s
-            );
-        } else {
-            println!("  (no bare ray-query probe: {} has no ray queries)", gpu.device.report.name);
-        }
-        let traced_times = traced.stats.pass_times.unwrap_or_default();
-        println!(
-            "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \
-             raster frame's GPU time, {:.1} bytes/pixel",
-            traced_times.accumulate_ms / n,
-            traced_times.total_ms() / total,
-            traced.stats.device_bytes.saturating_sub(traced.scene_bytes) as f64 / pixels
-        );
-        println!(
-            "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}, 32 of them the \
-             fixed-point sums; target <= 100 with them, docs/performance.md)",
-            f.scene_bytes as f64 / 1048576.0,
-            frame_bytes as f64 / 1048576.0,
-            frame_bytes as f64 / pixels,
-            s.image_bytes as f64 / pixels
-        );
-        print_paths_side_by_side(&by_path);
+        bench_scene_frames(args, &gpu, path, &paths, auto)?;
     }
-    // Scaling: total GPU time against spp at a fixed size, and against pixels at a fixed spp.
+    bench_scaling(args, &gpu)
+}
+
+/// One scene's frames: the raster and reference modes by the way `auto` traces (with the bare probe's figures
+/// where there are ray queries), and by every other way the device traces.
+fn bench_scene_frames(
+    args: &BenchArgs,
+    gpu: &Gpu,
+    path: &std::path::Path,
+    paths: &[strata::render::accumulate::TracePath],
+    auto: strata::render::accumulate::TracePath,
+) -> Result<()> {
+    use strata::bench::time_frame;
+    use strata::render::accumulate::TracePath;
+    use strata::scene::settings::Primary;
+    let (w, h) = args.size;
+    let mut scene = strata::load_scene(path)?;
+    if !scene.has_light() {
+        scene.add_default_light();
+    }
+    eprint!("\r{} ...", path.display());
+    let probe = auto == TracePath::Query;
+    let f = time_frame(gpu, &scene, (w, h), args.spp, Primary::Raster, auto.as_trace(), probe)?;
+    let traced = time_frame(gpu, &scene, (w, h), args.spp, Primary::Rays, auto.as_trace(), false)?;
+    // The other ways to trace, both primary modes, for the side-by-side line.
+    let mut by_path = Vec::new();
+    for other in paths {
+        let (raster, rays) = if *other == auto {
+            (f.stats.clone(), traced.stats.clone())
+        } else {
+            let t = other.as_trace();
+            let raster = time_frame(gpu, &scene, (w, h), args.spp, Primary::Raster, t, false)?.stats;
+            (raster, time_frame(gpu, &scene, (w, h), args.spp, Primary::Rays, t, false)?.stats)
+        };
+        by_path.push((*other, raster, rays));
+    }
+    eprint!("\r\x1b[2K");
+    println!("{}:", path.display());
+    print_frame_figures(gpu, args.size, &f, &traced, probe);
+    print_paths_side_by_side(&by_path);
+    Ok(())
+}
+
+/// The raster frame's pass times, rays, probe ratios and memory, and the reference mode's beside it.
+fn print_frame_figures(
+    gpu: &Gpu,
+    (w, h): (u32, u32),
+    f: &strata::bench::FrameFigure,
+    traced: &strata::bench::FrameFigure,
+    probe: bool,
+) {
+    let pixels = f64::from(w) * f64::from(h);
+    let s = &f.stats;
+    let t = s.pass_times.unwrap_or_default();
+    let n = f64::from(s.samples);
+    let total = t.total_ms();
+    let rays = (s.shadow_rays + s.secondary_rays) as f64;
+    let accumulate_rays_per_s = rays / (t.accumulate_ms / 1e3);
+    let probe_rays_per_s = f.probe_rays as f64 / (f.probe_ms / 1e3);
+    let frame_bytes = s.device_bytes.saturating_sub(f.scene_bytes);
+    println!(
+        "  GPU ms per sample: TLAS {:.2}, G-buffer {:.2}, accumulate {:.2}; resolve {:.2} per frame",
+        t.tlas_ms / n,
+        t.gbuffer_ms / n,
+        t.accumulate_ms / n,
+        t.resolve_ms
+    );
+    println!(
+        "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 33.3%)",
+        n / (total / 1e3),
+        s.seconds,
+        100.0 * (t.tlas_ms + t.gbuffer_ms) / total
+    );
+    println!(
+        "  rays per sample {:.0} shadow + {:.0} secondary; {:.2} M shadow rays/s, {:.2} M secondary rays/s",
+        s.shadow_rays as f64 / n,
+        s.secondary_rays as f64 / n,
+        s.shadow_rays as f64 / (t.accumulate_ms / 1e3) / 1e6,
+        s.secondary_rays as f64 / (t.accumulate_ms / 1e3) / 1e6
+    );
+    if probe {
+        println!(
+            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): \
+             {:.1}% (target >= 60%)",
+            accumulate_rays_per_s / 1e6,
+            probe_rays_per_s / 1e6,
+            f.probe_rays,
+            100.0 * accumulate_rays_per_s / probe_rays_per_s
+        );
+        let replay_rays_per_s = f.replay_rays as f64 / (f.replay_ms / 1e3);
+        println!(
+            "  accumulate vs the probe replaying one sample's own rays ({} shadow rays, first hit; {} closest \
+             hit), no shading: {:.2} M rays/s, {:.1}%",
+            f.replay_shadow_rays,
+            f.replay_rays - f.replay_shadow_rays,
+            replay_rays_per_s / 1e6,
+            100.0 * accumulate_rays_per_s / replay_rays_per_s
+        );
+    } else {
+        println!("  (no bare ray-query probe: {} has no ray queries)", gpu.device.report.name);
+    }
+    let traced_times = traced.stats.pass_times.unwrap_or_default();
+    println!(
+        "  reference mode (--primary rays): accumulate {:.2} ms per sample with its camera rays, frame {:.2}x the \
+         raster frame's GPU time, {:.1} bytes/pixel",
+        traced_times.accumulate_ms / n,
+        traced_times.total_ms() / total,
+        traced.stats.device_bytes.saturating_sub(traced.scene_bytes) as f64 / pixels
+    );
+    println!(
+        "  device memory: scene {:.2} MiB, frame {:.2} MiB = {:.1} bytes/pixel (images alone {:.1}, 32 of them the \
+         fixed-point sums; target <= 100 with them, docs/performance.md)",
+        f.scene_bytes as f64 / 1048576.0,
+        frame_bytes as f64 / 1048576.0,
+        frame_bytes as f64 / pixels,
+        s.image_bytes as f64 / pixels
+    );
+}
+
+/// Scaling: total GPU time against spp at a fixed size, and against pixels at a fixed spp.
+fn bench_scaling(args: &BenchArgs, gpu: &Gpu) -> Result<()> {
+    use strata::bench::{fitted_exponent, time_frame};
+    use strata::scene::settings::{Primary, Trace};
+    let (w, h) = args.size;
     let mut scene = strata::load_scene(&args.scene)?;
     if !scene.has_light() {
         scene.add_default_light();
@@ -280,13 +315,13 @@ fn bench_frame(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     let mut by_spp = Vec::new();
     for spp in [8u32, 16, 32] {
         eprint!("\rscaling: {spp} spp ...");
-        let f = time_frame(&gpu, &scene, half, spp, Primary::Raster, Trace::Auto, false)?;
+        let f = time_frame(gpu, &scene, half, spp, Primary::Raster, Trace::Auto, false)?;
         by_spp.push((f64::from(spp), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     let mut by_pixels = Vec::new();
     for size in [quarter, half, (w, h)] {
         eprint!("\rscaling: {}x{} ...", size.0, size.1);
-        let f = time_frame(&gpu, &scene, size, 8, Primary::Raster, Trace::Auto, false)?;
+        let f = time_frame(gpu, &scene, size, 8, Primary::Raster, Trace::Auto, false)?;
         by_pixels.push((f64::from(size.0 * size.1), f.stats.pass_times.unwrap_or_default().total_ms()));
     }
     eprint!("\r\x1b[2K");

@@ -282,15 +282,11 @@ pub fn render_samples(
         ray_log: ray_log.as_ref().map_or(0, |log| log.address()),
         ..frame_push_constants(settings, options, backdrop)
     };
-    let mut times = PassTimes::default();
-    let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
-    let mut done = range_start;
     let initial = match resume {
         Some(r) => Some(Buffer::with_data(device, "resumed sums", &r.counts, vk::BufferUsageFlags::TRANSFER_SRC, 16)?),
         None => None,
     };
     let held_sums = |done: u32| targets.held_sums(spp, resume, range_start..done);
-    let mut last_checkpoint = std::time::Instant::now();
     if !progress(0, range_end - range_start) {
         return Err(Interrupted.into());
     }
@@ -304,41 +300,9 @@ pub fn render_samples(
         batch,
         traced,
     };
-    while done < range_end {
-        let count = batch.min(range_end - done);
-        // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
-        let samples = (0..count).map(|slot| slots.fill(slot, done + slot, &frame_push)).collect::<Result<Vec<_>>>()?;
-        slots.reset_counters(batch)?;
-        if let Some(timer) = &timer {
-            timer.reset();
-        }
-        let last = done + count == range_end;
-        let batch_start = match (done == range_start, &initial) {
-            (false, _) => SumsStart::Continue,
-            (true, Some(from)) => SumsStart::From(from),
-            (true, None) => SumsStart::Zero,
-        };
-        submit_and_wait(device, "sample batch", |cmd| {
-            passes.record_batch(cmd, &targets, &slots, &samples, batch_start, last.then_some(&resolved_images));
-            Ok(())
-        })?;
-        let (shadow, secondary) = slots.rays_counted(count)?;
-        (shadow_rays, secondary_rays) = (shadow_rays + shadow, secondary_rays + secondary);
-        if let Some(timer) = &timer {
-            times.add_batch(timer, count, last.then_some(batch))?;
-        }
-        done += count;
-        let stop = !progress(done - range_start, range_end - range_start) && done < range_end;
-        if let Some(Checkpoint { every, save }) = &mut checkpoint {
-            if done < range_end && (stop || last_checkpoint.elapsed() >= *every) {
-                save(&held_sums(done)?)?;
-                last_checkpoint = std::time::Instant::now();
-            }
-        }
-        if stop {
-            return Err(Interrupted.into());
-        }
-    }
+    let run = SampleRun { range: range_start..range_end, initial: initial.as_ref(), push: &frame_push };
+    let (shadow_rays, secondary_rays, times) =
+        passes.run(&targets, &mut slots, &run, &resolved_images, progress, &mut checkpoint, &held_sums)?;
     let super::resolve::ResolvedSums { linear, display, exposure } =
         resolve.read_out(&resolved_images, look, settings.auto_exposure)?;
     let samples = range_end - range_start;
@@ -547,7 +511,73 @@ struct SamplePasses<'a> {
     traced: bool,
 }
 
+/// The samples one run renders, the sums its first starts from (None: zero) and the push constants they share.
+struct SampleRun<'a> {
+    range: std::ops::Range<u32>,
+    initial: Option<&'a Buffer>,
+    push: &'a AccumulatePush,
+}
+
 impl SamplePasses<'_> {
+    /// Renders `run`'s samples in batches of `self.batch`, one submission each: the host fills each sample's slot
+    /// first, then records the batch; the last batch ends with the resolve into `resolved`. After each batch:
+    /// `progress` (false: stop) and, when due or stopping, a checkpoint of `held_sums`. Returns the shadow and
+    /// secondary rays counted and the pass times.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &self,
+        targets: &FrameTargets,
+        slots: &mut SampleSlots<'_>,
+        run: &SampleRun<'_>,
+        resolved: &super::resolve::ResolvedImages<'_>,
+        progress: &mut dyn FnMut(u32, u32) -> bool,
+        checkpoint: &mut Option<Checkpoint<'_>>,
+        held_sums: &dyn Fn(u32) -> Result<crate::partial::PartialSums>,
+    ) -> Result<(u64, u64, PassTimes)> {
+        let device = targets.sums.device();
+        let (start, end) = (run.range.start, run.range.end);
+        let mut times = PassTimes::default();
+        let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
+        let mut last_checkpoint = std::time::Instant::now();
+        let mut done = start;
+        while done < end {
+            let count = self.batch.min(end - done);
+            // Everything per sample on the host first: transforms, TLAS instances, lights, draws, camera.
+            let samples = (0..count).map(|slot| slots.fill(slot, done + slot, run.push)).collect::<Result<Vec<_>>>()?;
+            slots.reset_counters(self.batch)?;
+            if let Some(timer) = self.timer {
+                timer.reset();
+            }
+            let last = done + count == end;
+            let batch_start = match (done == start, run.initial) {
+                (false, _) => SumsStart::Continue,
+                (true, Some(from)) => SumsStart::From(from),
+                (true, None) => SumsStart::Zero,
+            };
+            submit_and_wait(device, "sample batch", |cmd| {
+                self.record_batch(cmd, targets, slots, &samples, batch_start, last.then_some(resolved));
+                Ok(())
+            })?;
+            let (shadow, secondary) = slots.rays_counted(count)?;
+            (shadow_rays, secondary_rays) = (shadow_rays + shadow, secondary_rays + secondary);
+            if let Some(timer) = self.timer {
+                times.add_batch(timer, count, last.then_some(self.batch))?;
+            }
+            done += count;
+            let stop = !progress(done - start, end - start) && done < end;
+            if let Some(Checkpoint { every, save }) = checkpoint {
+                if done < end && (stop || last_checkpoint.elapsed() >= *every) {
+                    save(&held_sums(done)?)?;
+                    last_checkpoint = std::time::Instant::now();
+                }
+            }
+            if stop {
+                return Err(Interrupted.into());
+            }
+        }
+        Ok((shadow_rays, secondary_rays, times))
+    }
+
     /// Records a batch's samples, then makes their sums visible to the host (ray counters, checkpoints) and, for
     /// the frame's last batch, resolves them (`resolve_into`). `sums` says how the batch's first sample finds the
     /// sums.

@@ -135,26 +135,7 @@ impl PreviewPass {
         let view_from_world = camera.view_from_world();
         let clip_from_world = camera.clip_from_view(width as f32 / height as f32) * view_from_world;
 
-        // One record per (instance, primitive), in draw order; and which UV set each draw's texture reads.
-        let mut draws = Vec::new();
-        let mut reads_uv1 = Vec::new();
-        for instance in &scene.instances {
-            let view_normal = Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
-            for primitive in &gpu_scene.meshes[instance.mesh].primitives {
-                let material = primitive.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
-                let texture = material.base_color_texture.filter(|t| t.texture < textures.images.len());
-                let uv = texture.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
-                draws.push(PreviewDraw {
-                    clip_from_object: clip_from_world * instance.world_from_object,
-                    view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
-                    base_color: material.base_color,
-                    uv_transform_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
-                    base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(-1),
-                    pad: [0; 3],
-                });
-                reads_uv1.push(texture.is_some_and(|t| t.tex_coord == 1));
-            }
-        }
+        let (mut draws, reads_uv1) = draw_records(scene, gpu_scene, textures, view_from_world, clip_from_world);
         if draws.is_empty() {
             // An empty scene still binds a valid buffer.
             draws.push(bytemuck::Zeroable::zeroed());
@@ -226,6 +207,36 @@ impl PreviewPass {
             read_image(device, &color, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE)?;
         Frame::new(width, height, readback.to_rgba_f32()?)
     }
+}
+
+/// One record per (instance, primitive), in draw order; and which UV set each draw's texture reads.
+fn draw_records(
+    scene: &Scene,
+    gpu_scene: &GpuScene,
+    textures: &GpuTextures,
+    view_from_world: Mat4,
+    clip_from_world: Mat4,
+) -> (Vec<PreviewDraw>, Vec<bool>) {
+    let mut draws = Vec::new();
+    let mut reads_uv1 = Vec::new();
+    for instance in &scene.instances {
+        let view_normal = Mat3::from_mat4(view_from_world * instance.world_from_object).inverse().transpose();
+        for primitive in &gpu_scene.meshes[instance.mesh].primitives {
+            let material = primitive.material.and_then(|m| scene.materials.get(m)).cloned().unwrap_or_default();
+            let texture = material.base_color_texture.filter(|t| t.texture < textures.images.len());
+            let uv = texture.and_then(|t| t.transform).map(|t| t.matrix()).unwrap_or(Mat3::IDENTITY);
+            draws.push(PreviewDraw {
+                clip_from_object: clip_from_world * instance.world_from_object,
+                view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
+                base_color: material.base_color,
+                uv_transform_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
+                base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(-1),
+                pad: [0; 3],
+            });
+            reads_uv1.push(texture.is_some_and(|t| t.tex_coord == 1));
+        }
+    }
+    (draws, reads_uv1)
 }
 
 #[cfg(test)]

@@ -12,103 +12,16 @@ const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
 /// The glTF JSON and the binary buffer for `scene`; the JSON names the buffer `bin_name`.
 pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views: Vec<Value> = Vec::new();
-    let mut accessors: Vec<Value> = Vec::new();
-    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| -> usize {
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
-        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target}));
-        bin.extend_from_slice(bytes);
-        views.len() - 1
-    };
-    let mut meshes = Vec::new();
-    for mesh in &scene.meshes {
-        let mut primitives = Vec::new();
-        for p in &mesh.primitives {
-            if p.positions.is_empty() || p.indices.is_empty() {
-                bail!("mesh {}: empty primitive", mesh.name);
-            }
-            let mut attributes = serde_json::Map::new();
-            let (lo, hi) =
-                p.positions.iter().fold((glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)), |(lo, hi), &v| {
-                    (lo.min(v), hi.max(v))
-                });
-            let view = push_view(&mut bin, bytemuck::cast_slice(&p.positions), ARRAY_BUFFER);
-            accessors.push(json!({"bufferView": view, "componentType": FLOAT, "count": p.positions.len(),
-                "type": "VEC3", "min": lo.to_array(), "max": hi.to_array()}));
-            attributes.insert("POSITION".into(), json!(accessors.len() - 1));
-            if p.normals.len() == p.positions.len() {
-                let view = push_view(&mut bin, bytemuck::cast_slice(&p.normals), ARRAY_BUFFER);
-                accessors.push(
-                    json!({"bufferView": view, "componentType": FLOAT, "count": p.normals.len(), "type": "VEC3"}),
-                );
-                attributes.insert("NORMAL".into(), json!(accessors.len() - 1));
-            }
-            if p.uvs.len() == p.positions.len() {
-                let view = push_view(&mut bin, bytemuck::cast_slice(&p.uvs), ARRAY_BUFFER);
-                accessors
-                    .push(json!({"bufferView": view, "componentType": FLOAT, "count": p.uvs.len(), "type": "VEC2"}));
-                attributes.insert("TEXCOORD_0".into(), json!(accessors.len() - 1));
-            }
-            let view = push_view(&mut bin, bytemuck::cast_slice(&p.indices), ELEMENT_ARRAY_BUFFER);
-            accessors.push(
-                json!({"bufferView": view, "componentType": UNSIGNED_INT, "count": p.indices.len(), "type": "SCALAR"}),
-            );
-            let mut primitive = json!({"attributes": attributes, "indices": accessors.len() - 1, "mode": 4});
-            if let Some(m) = p.material {
-                primitive["material"] = json!(m);
-            }
-            primitives.push(primitive);
-        }
-        meshes.push(json!({"name": mesh.name, "primitives": primitives}));
-    }
+    let mut buffer = BinaryBuffer::default();
+    let meshes = scene.meshes.iter().map(|mesh| mesh_json(&mut buffer, mesh)).collect::<Result<Vec<_>>>()?;
     let mut extensions_used: Vec<&str> = Vec::new();
     let mut materials: Vec<Value> = Vec::new();
     for m in &scene.materials {
-        if m.base_color_texture.is_some() || m.normal_texture.is_some() || m.emissive_texture.is_some() {
-            bail!("material {}: exporting textures is not supported", m.name);
-        }
-        let mut material = json!({"name": m.name, "pbrMetallicRoughness": {"baseColorFactor": m.base_color.to_array(),
-            "metallicFactor": m.metallic, "roughnessFactor": m.roughness}});
-        let mut extensions = serde_json::Map::new();
-        if m.is_emissive() {
-            // emissiveFactor is clamped to [0, 1]; the rest goes into KHR_materials_emissive_strength.
-            let strength = m.emissive.max_element().max(1.0);
-            material["emissiveFactor"] = json!((m.emissive / strength).to_array());
-            if strength > 1.0 {
-                extensions.insert("KHR_materials_emissive_strength".into(), json!({"emissiveStrength": strength}));
+        let (material, extensions) = material_json(m)?;
+        for name in extensions {
+            if !extensions_used.contains(&name) {
+                extensions_used.push(name);
             }
-        }
-        if m.transmission > 0.0 {
-            extensions.insert("KHR_materials_transmission".into(), json!({"transmissionFactor": m.transmission}));
-        }
-        if m.ior != 1.5 {
-            extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
-        }
-        if m.specular != 1.0 || m.specular_color != glam::Vec3::ONE {
-            let mut specular = json!({"specularFactor": m.specular});
-            if m.specular_color != glam::Vec3::ONE {
-                specular["specularColorFactor"] = json!(m.specular_color.to_array());
-            }
-            extensions.insert("KHR_materials_specular".into(), specular);
-        }
-        if m.double_sided {
-            material["doubleSided"] = json!(true);
-        }
-        for name in extensions.keys() {
-            if !extensions_used.contains(&name.as_str()) {
-                extensions_used.push(match name.as_str() {
-                    "KHR_materials_emissive_strength" => "KHR_materials_emissive_strength",
-                    "KHR_materials_transmission" => "KHR_materials_transmission",
-                    "KHR_materials_specular" => "KHR_materials_specular",
-                    _ => "KHR_materials_ior",
-                });
-            }
-        }
-        if !extensions.is_empty() {
-            material["extensions"] = Value::Object(extensions);
         }
         materials.push(material);
     }
@@ -126,20 +39,10 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
         .collect();
     let mut cameras = Vec::new();
     if let Some(camera) = &scene.camera {
-        let projection = match camera.projection {
-            Projection::Perspective { yfov, znear, zfar } => {
-                let mut p = json!({"yfov": yfov, "znear": znear});
-                if let Some(zfar) = zfar {
-                    p["zfar"] = json!(zfar);
-                }
-                json!({"name": camera.name, "type": "perspective", "perspective": p})
-            }
-            Projection::Orthographic { xmag, ymag, znear, zfar } => json!({"name": camera.name, "type": "orthographic",
-                "orthographic": {"xmag": xmag, "ymag": ymag, "znear": znear, "zfar": zfar}}),
-        };
-        cameras.push(projection);
+        cameras.push(camera_json(camera));
         nodes.push(json!({"name": camera.name, "camera": 0, "matrix": camera.world_from_camera.to_cols_array()}));
     }
+    let BinaryBuffer { bin, views, accessors } = buffer;
     let mut root = json!({
         "asset": {"version": "2.0", "generator": "strata scene library"},
         "scene": 0,
@@ -160,6 +63,128 @@ pub fn to_gltf(scene: &Scene, bin_name: &str) -> Result<(String, Vec<u8>)> {
     let mut text = serde_json::to_string_pretty(&root).context("serializing glTF JSON")?;
     text.push('\n');
     Ok((text, bin))
+}
+
+/// The one binary buffer, its views and the accessors that read them, as they grow.
+#[derive(Default)]
+struct BinaryBuffer {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl BinaryBuffer {
+    /// Appends `bytes` as a view (4-byte aligned) and an accessor of it: `accessor` holds the accessor's other
+    /// fields. Returns the accessor's index.
+    fn accessor(&mut self, bytes: &[u8], target: u32, mut accessor: Value) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let view = json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len(), "target": target});
+        self.views.push(view);
+        self.bin.extend_from_slice(bytes);
+        accessor["bufferView"] = json!(self.views.len() - 1);
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+}
+
+/// A mesh's JSON, its vertex and index data appended to `buffer`.
+fn mesh_json(buffer: &mut BinaryBuffer, mesh: &super::Mesh) -> Result<Value> {
+    let mut primitives = Vec::new();
+    for p in &mesh.primitives {
+        if p.positions.is_empty() || p.indices.is_empty() {
+            bail!("mesh {}: empty primitive", mesh.name);
+        }
+        let mut attributes = serde_json::Map::new();
+        let (lo, hi) = p
+            .positions
+            .iter()
+            .fold((glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+        let positions = buffer.accessor(
+            bytemuck::cast_slice(&p.positions),
+            ARRAY_BUFFER,
+            json!({"componentType": FLOAT, "count": p.positions.len(), "type": "VEC3", "min": lo.to_array(),
+                "max": hi.to_array()}),
+        );
+        attributes.insert("POSITION".into(), json!(positions));
+        if p.normals.len() == p.positions.len() {
+            let fields = json!({"componentType": FLOAT, "count": p.normals.len(), "type": "VEC3"});
+            let normals = buffer.accessor(bytemuck::cast_slice(&p.normals), ARRAY_BUFFER, fields);
+            attributes.insert("NORMAL".into(), json!(normals));
+        }
+        if p.uvs.len() == p.positions.len() {
+            let fields = json!({"componentType": FLOAT, "count": p.uvs.len(), "type": "VEC2"});
+            let uvs = buffer.accessor(bytemuck::cast_slice(&p.uvs), ARRAY_BUFFER, fields);
+            attributes.insert("TEXCOORD_0".into(), json!(uvs));
+        }
+        let fields = json!({"componentType": UNSIGNED_INT, "count": p.indices.len(), "type": "SCALAR"});
+        let indices = buffer.accessor(bytemuck::cast_slice(&p.indices), ELEMENT_ARRAY_BUFFER, fields);
+        let mut primitive = json!({"attributes": attributes, "indices": indices, "mode": 4});
+        if let Some(m) = p.material {
+            primitive["material"] = json!(m);
+        }
+        primitives.push(primitive);
+    }
+    Ok(json!({"name": mesh.name, "primitives": primitives}))
+}
+
+/// A material's JSON and the extensions it uses.
+fn material_json(m: &super::Material) -> Result<(Value, Vec<&'static str>)> {
+    if m.base_color_texture.is_some() || m.normal_texture.is_some() || m.emissive_texture.is_some() {
+        bail!("material {}: exporting textures is not supported", m.name);
+    }
+    let mut material = json!({"name": m.name, "pbrMetallicRoughness": {"baseColorFactor": m.base_color.to_array(),
+        "metallicFactor": m.metallic, "roughnessFactor": m.roughness}});
+    let mut extensions = serde_json::Map::new();
+    let mut used = Vec::new();
+    if m.is_emissive() {
+        // emissiveFactor is clamped to [0, 1]; the rest goes into KHR_materials_emissive_strength.
+        let strength = m.emissive.max_element().max(1.0);
+        material["emissiveFactor"] = json!((m.emissive / strength).to_array());
+        if strength > 1.0 {
+            extensions.insert("KHR_materials_emissive_strength".into(), json!({"emissiveStrength": strength}));
+            used.push("KHR_materials_emissive_strength");
+        }
+    }
+    if m.transmission > 0.0 {
+        extensions.insert("KHR_materials_transmission".into(), json!({"transmissionFactor": m.transmission}));
+        used.push("KHR_materials_transmission");
+    }
+    if m.ior != 1.5 {
+        extensions.insert("KHR_materials_ior".into(), json!({"ior": m.ior}));
+        used.push("KHR_materials_ior");
+    }
+    if m.specular != 1.0 || m.specular_color != glam::Vec3::ONE {
+        let mut specular = json!({"specularFactor": m.specular});
+        if m.specular_color != glam::Vec3::ONE {
+            specular["specularColorFactor"] = json!(m.specular_color.to_array());
+        }
+        extensions.insert("KHR_materials_specular".into(), specular);
+        used.push("KHR_materials_specular");
+    }
+    if m.double_sided {
+        material["doubleSided"] = json!(true);
+    }
+    if !extensions.is_empty() {
+        material["extensions"] = Value::Object(extensions);
+    }
+    Ok((material, used))
+}
+
+/// A camera's JSON (glTF 2.0 §5.12).
+fn camera_json(camera: &super::Camera) -> Value {
+    match camera.projection {
+        Projection::Perspective { yfov, znear, zfar } => {
+            let mut p = json!({"yfov": yfov, "znear": znear});
+            if let Some(zfar) = zfar {
+                p["zfar"] = json!(zfar);
+            }
+            json!({"name": camera.name, "type": "perspective", "perspective": p})
+        }
+        Projection::Orthographic { xmag, ymag, znear, zfar } => json!({"name": camera.name, "type": "orthographic",
+            "orthographic": {"xmag": xmag, "ymag": ymag, "znear": znear, "zfar": zfar}}),
+    }
 }
 
 /// Writes `scene` to `path` (`.gltf`) and its buffer beside it (`.bin`), each atomically.

@@ -236,57 +236,8 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Opt
             light: None,
         })
         .collect();
-    for i in 0..scene.nodes.len() {
-        if !scene.nodes[i].transform.matrix().is_finite() {
-            bail!("node \"{}\": transform is not finite", scene.nodes[i].name);
-        }
-        for c in scene.nodes[i].children.clone() {
-            if let Some(p) = scene.nodes[c].parent {
-                bail!("node {c} has two parents ({p} and {i}); glTF node hierarchies are trees (§3.5.1)");
-            }
-            scene.nodes[c].parent = Some(i);
-        }
-    }
-    // A cycle leaves nodes that never reach a root.
-    for start in 0..scene.nodes.len() {
-        let mut at = start;
-        for _ in 0..=scene.nodes.len() {
-            match scene.nodes[at].parent {
-                Some(p) => at = p,
-                None => break,
-            }
-        }
-        if scene.nodes[at].parent.is_some() {
-            bail!("node {start} is part of a cycle in the node hierarchy");
-        }
-    }
-    let chosen = document.default_scene().or_else(|| document.scenes().next());
-    scene.roots = match chosen {
-        Some(s) => s.nodes().map(|n| n.index()).collect(),
-        None => Vec::new(),
-    };
-    // glTF §3.5.2 says a scene's nodes must be roots; widely used exporters (Kenney's models among them) also list
-    // children there, and every viewer draws such a file. Keep the hierarchy: draw each node once, as a child,
-    // from its topmost ancestor, with a warning.
-    let mut roots: Vec<usize> = Vec::with_capacity(scene.roots.len());
-    for &listed in &scene.roots {
-        let mut top = listed;
-        while let Some(parent) = scene.nodes[top].parent {
-            top = parent;
-        }
-        if top != listed {
-            scene.warnings.push(format!(
-                "scene node {listed} (\"{}\") is listed as a root but is a child of node {}; drawing it once, as a \
-                 child (glTF 2.0 §3.5.2)",
-                scene.nodes[listed].name,
-                scene.nodes[listed].parent.unwrap_or(top)
-            ));
-        }
-        if !roots.contains(&top) {
-            roots.push(top);
-        }
-    }
-    scene.roots = roots;
+    link_parents(scene)?;
+    scene.roots = scene_roots(document, scene);
     let world = scene.node_world_transforms(None);
     let gltf_nodes: Vec<gltf::Node<'_>> = document.nodes().collect();
     // Depth-first from the roots, in document order: instances, cameras and lights of the rendered scene.
@@ -343,6 +294,67 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Opt
     }
     scene.camera = scene.cameras.first().cloned();
     Ok(())
+}
+
+/// Each node's parent from the children lists, refusing non-finite transforms, a node with two parents and
+/// cycles (glTF 2.0 §3.5.1: node hierarchies are disjoint trees).
+fn link_parents(scene: &mut Scene) -> Result<()> {
+    for i in 0..scene.nodes.len() {
+        if !scene.nodes[i].transform.matrix().is_finite() {
+            bail!("node \"{}\": transform is not finite", scene.nodes[i].name);
+        }
+        for c in scene.nodes[i].children.clone() {
+            if let Some(p) = scene.nodes[c].parent {
+                bail!("node {c} has two parents ({p} and {i}); glTF node hierarchies are trees (§3.5.1)");
+            }
+            scene.nodes[c].parent = Some(i);
+        }
+    }
+    // A cycle leaves nodes that never reach a root.
+    for start in 0..scene.nodes.len() {
+        let mut at = start;
+        for _ in 0..=scene.nodes.len() {
+            match scene.nodes[at].parent {
+                Some(p) => at = p,
+                None => break,
+            }
+        }
+        if scene.nodes[at].parent.is_some() {
+            bail!("node {start} is part of a cycle in the node hierarchy");
+        }
+    }
+    Ok(())
+}
+
+/// The chosen scene's root nodes (the default scene, else the first).
+fn scene_roots(document: &gltf::Document, scene: &mut Scene) -> Vec<usize> {
+    let chosen = document.default_scene().or_else(|| document.scenes().next());
+    let listed: Vec<usize> = match chosen {
+        Some(s) => s.nodes().map(|n| n.index()).collect(),
+        None => Vec::new(),
+    };
+    // glTF §3.5.2 says a scene's nodes must be roots; widely used exporters (Kenney's models among them) also list
+    // children there, and every viewer draws such a file. Keep the hierarchy: draw each node once, as a child,
+    // from its topmost ancestor, with a warning.
+    let mut roots: Vec<usize> = Vec::with_capacity(listed.len());
+    for listed in listed {
+        let mut top = listed;
+        while let Some(parent) = scene.nodes[top].parent {
+            top = parent;
+        }
+        if top != listed {
+            scene.warnings.push(format!(
+                "scene node {listed} (\"{}\") is listed as a root but is a child of node {}; drawing it once, as a \
+                 child (glTF 2.0 §3.5.2)",
+                scene.nodes[listed].name,
+                scene.nodes[listed].parent.unwrap_or(top)
+            ));
+        }
+        if !roots.contains(&top) {
+            roots.push(top);
+        }
+    }
+    roots
 }
 
 fn check_projection(p: &Projection) -> Result<()> {
