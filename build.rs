@@ -130,9 +130,12 @@ fn write_check_files(root: &Path, out: &Path) {
     std::fs::write(out, rust).unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display())));
 }
 
+/// A constant's GLSL type, the suffix its value ends with, its Rust type, and whether a value reads as that type.
+type ConstantKind = (&'static str, &'static str, &'static str, fn(&str) -> bool);
+
 /// `shaders/include/shared_constants.glsl` as Rust: each `const uint NAME = VALUEu;` becomes
-/// `pub const NAME: u32 = VALUE;`, so both languages read the one file. Comments, blank lines and the include
-/// guard are skipped; any other line fails the build, naming it.
+/// `pub const NAME: u32 = VALUE;` (`const int` an i32, `const float` an f32), so both languages read the one
+/// file. Comments, blank lines and the include guard are skipped; any other line fails the build, naming it.
 fn write_shared_constants(source: &Path, out: &Path) {
     let text =
         std::fs::read_to_string(source).unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", source.display())));
@@ -142,17 +145,29 @@ fn write_shared_constants(source: &Path, out: &Path) {
         if line.is_empty() || line.starts_with("//") || line.starts_with('#') {
             continue;
         }
-        let parsed = line
-            .strip_prefix("const uint ")
-            .and_then(|rest| rest.strip_suffix("u;"))
-            .and_then(|rest| rest.split_once(" = "))
-            .and_then(|(name, value)| Some((name, value.parse::<u32>().ok()?)));
+        let kinds: [ConstantKind; 3] = [
+            ("uint", "u;", "u32", |v| v.parse::<u32>().is_ok()),
+            ("int", ";", "i32", |v| v.parse::<i32>().is_ok()),
+            ("float", ";", "f32", |v| v.contains('.') && v.parse::<f32>().is_ok_and(f32::is_finite)),
+        ];
+        let parsed = kinds.iter().find_map(|&(glsl, suffix, rust_type, valid)| {
+            let (name, value) = line
+                .strip_prefix("const ")?
+                .strip_prefix(glsl)?
+                .strip_prefix(' ')?
+                .strip_suffix(suffix)?
+                .split_once(" = ")?;
+            valid(value).then_some((name, value, rust_type))
+        });
         match parsed {
-            Some((name, value)) if name.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_') => {
-                let _ = writeln!(rust, "pub const {name}: u32 = {value};");
+            Some((name, value, rust_type))
+                if name.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_') =>
+            {
+                let _ = writeln!(rust, "pub const {name}: {rust_type} = {value};");
             }
             _ => fail(&format!(
-                "{}:{}: expected `const uint NAME = VALUEu;`, found `{line}`",
+                "{}:{}: expected `const uint NAME = VALUEu;`, `const int NAME = VALUE;` or `const float NAME = VALUE;`, \
+                 found `{line}`",
                 source.display(),
                 number + 1
             )),

@@ -33,14 +33,15 @@ fn gpu_samplers_equal_the_rust_twin() {
     )
     .unwrap();
     let kinds = [
-        (SamplerKind::Regular, 0u32),
-        (SamplerKind::Random, 1),
-        (SamplerKind::Jittered, 2),
-        (SamplerKind::MultiJittered, 3),
-        (SamplerKind::Sobol, 4),
+        SamplerKind::Regular,
+        SamplerKind::Random,
+        SamplerKind::Jittered,
+        SamplerKind::MultiJittered,
+        SamplerKind::Sobol,
     ];
-    for (kind, code) in kinds {
+    for kind in kinds {
         for count in [1u32, 7, 16, 64] {
+            let code = strata::render::frame::sampler_code(kind);
             let push = Push { kind: code, seed: 12345, count, pixels: 1000 };
             let total = (push.count * push.pixels) as usize;
             let output = Buffer::new(

@@ -1,16 +1,8 @@
 // The accumulation pass's data; mirrored by src/render/accumulate_layout.rs (size/offset tests there).
 #ifndef ACCUMULATE_LAYOUT_GLSL
 #define ACCUMULATE_LAYOUT_GLSL
-
-const float LIGHT_POINT = 0.0;
-const float LIGHT_SPOT = 1.0;
-const float LIGHT_DIRECTIONAL = 2.0;
-const float LIGHT_QUAD = 3.0;
-const float LIGHT_DISK = 4.0;
-const float LIGHT_SPHERE = 5.0;
-const float LIGHT_TRIANGLE = 6.0;
-const float LIGHT_ENVIRONMENT = 7.0;  // the environment (environment.glsl), first of a sample's lights when present
-const float LIGHT_PARALLELOGRAM = 8.0;  // two emissive triangles making a quad, sampled whole (render/lights.rs)
+// Light kinds (LIGHT_*) and direct-light estimators (DIRECT_*) are shared constants.
+#include "shared_constants.glsl"
 
 struct GpuLight {
     vec4 position_kind;  // xyz centre or first vertex, w kind
@@ -73,10 +65,4 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint pad_end1;
 } pc;
 
-// The direct-light estimators (render::frame::DirectLight): light sampling and BSDF sampling combined by
-// multiple importance sampling (Veach and Guibas 1995), or either alone. All three estimate the same integral,
-// so the tests hold each to the others.
-const uint DIRECT_MIS = 0u;
-const uint DIRECT_LIGHT_SAMPLING = 1u;
-const uint DIRECT_BSDF_SAMPLING = 2u;
 #endif

@@ -4,14 +4,8 @@
 #ifndef BUMP_GLSL
 #define BUMP_GLSL
 #include "noise.glsl"
-
-const int BUMP_NONE = -1;
-const int BUMP_NOISE = 0;
-const int BUMP_FBM = 1;
-const int BUMP_TURBULENCE = 2;
-const int BUMP_SINE = 3;
-const int BUMP_CENTRAL_DIFFERENCES = 0;
-const int BUMP_ANALYTIC = 1;
+// Kinds and derivative methods (BUMP_*) are shared constants.
+#include "shared_constants.glsl"
 
 // Mirrors `GpuBump` in src/render/gbuffer_layout.rs.
 struct Bump {

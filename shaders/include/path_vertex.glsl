@@ -3,12 +3,9 @@
 #ifndef PATH_VERTEX_GLSL
 #define PATH_VERTEX_GLSL
 #include "ray_log.glsl"
+#include "shared_constants.glsl"
 
-// Sampler dimensions (docs/architecture.md: pixel, time, lens, light, then bounces). The camera's (0-2) are drawn on the
-// host for the whole image, except pixel and lens in the reference mode (per pixel, here).
-const uint DIM_PIXEL = 0u;
-const uint DIM_LENS = 2u;
-const uint DIM_FIRST_VERTEX = 3u;
+// Sampler dimensions: the camera's (DIM_PIXEL, DIM_TIME, DIM_LENS) and DIM_FIRST_VERTEX are shared constants.
 // Each vertex of a path draws from its own four, from DIM_FIRST_VERTEX + DIMS_PER_VERTEX · depth on:
 const uint VERTEX_LIGHT = 0u;            // which light (by power) and where on it (2D; direct_light.glsl)
 const uint VERTEX_ROULETTE = 1u;         // whether a weak path goes on (Russian roulette)

@@ -3,12 +3,8 @@
 // multi-jittered sampling (2013), with strata of different dimensions and pixels paired by hash permutations.
 #ifndef SAMPLING_GLSL
 #define SAMPLING_GLSL
-
-const uint SAMPLER_REGULAR = 0u;
-const uint SAMPLER_RANDOM = 1u;
-const uint SAMPLER_JITTERED = 2u;
-const uint SAMPLER_MULTI_JITTERED = 3u;
-const uint SAMPLER_SOBOL = 4u;
+// Sampler kinds (SAMPLER_*) are shared constants.
+#include "shared_constants.glsl"
 
 // PCG RXS-M-XS (Jarzynski and Olano 2020).
 uint pcg_hash(uint v) {

@@ -1,6 +1,6 @@
 // Numbers both languages read from this one file: GLSL includes it, and build.rs turns each line of the form
-// `const uint NAME = VALUEu;` into `pub const NAME: u32 = VALUE;` in Rust (strata::shaders::constants). Nothing
-// else belongs here: build.rs fails on a line it cannot read.
+// `const uint NAME = VALUEu;` into `pub const NAME: u32 = VALUE;` in Rust (strata::shaders::constants; `const
+// int` an i32, `const float` an f32). Nothing else belongs here: build.rs fails on a line it cannot read.
 #ifndef SHARED_CONSTANTS_GLSL
 #define SHARED_CONSTANTS_GLSL
 // The accumulation pass's descriptor bindings (accumulate_bindings.glsl; render::accumulate::AccumulatePass).
@@ -49,6 +49,46 @@ const uint GBUFFER_ATTACHMENT_MATERIAL = 2u;
 const uint GBUFFER_ATTACHMENT_EMISSION = 3u;
 const uint GBUFFER_ATTACHMENT_SPECULAR = 4u;
 const uint GBUFFER_ATTACHMENT_SURFACE_IDS = 5u;
+
+// Light kinds, in the w of a GpuLight's first vector (accumulate_layout.glsl; render::lights).
+const float LIGHT_POINT = 0.0;
+const float LIGHT_SPOT = 1.0;
+const float LIGHT_DIRECTIONAL = 2.0;
+const float LIGHT_QUAD = 3.0;
+const float LIGHT_DISK = 4.0;
+const float LIGHT_SPHERE = 5.0;
+const float LIGHT_TRIANGLE = 6.0;
+// The environment (environment.glsl), first of a sample's lights when present.
+const float LIGHT_ENVIRONMENT = 7.0;
+// Two emissive triangles making a quad, sampled whole (render/lights.rs).
+const float LIGHT_PARALLELOGRAM = 8.0;
+// The direct-light estimators (pc.direct_light; render::frame::DirectLight): light sampling and BSDF sampling
+// combined by multiple importance sampling (Veach and Guibas 1995), or either alone. All three estimate the same
+// integral, so the tests hold each to the others.
+const uint DIRECT_MIS = 0u;
+const uint DIRECT_LIGHT_SAMPLING = 1u;
+const uint DIRECT_BSDF_SAMPLING = 2u;
+// Bump height fields and how their derivatives are taken (Bump in bump.glsl; render::gbuffer_layout::GpuBump).
+const int BUMP_NONE = -1;
+const int BUMP_NOISE = 0;
+const int BUMP_FBM = 1;
+const int BUMP_TURBULENCE = 2;
+const int BUMP_SINE = 3;
+const int BUMP_CENTRAL_DIFFERENCES = 0;
+const int BUMP_ANALYTIC = 1;
+// Sampler kinds (pc.sampler; sampling.glsl and its Rust twin math::sampling).
+const uint SAMPLER_REGULAR = 0u;
+const uint SAMPLER_RANDOM = 1u;
+const uint SAMPLER_JITTERED = 2u;
+const uint SAMPLER_MULTI_JITTERED = 3u;
+const uint SAMPLER_SOBOL = 4u;
+// Sampler dimensions (docs/architecture.md: pixel, time, lens, light, then bounces). The camera's (0-2) are
+// drawn on the host for the whole image (render::sample_slots), except pixel and lens in the reference mode (per
+// pixel, path_vertex.glsl); each path vertex draws its own from DIM_FIRST_VERTEX on.
+const uint DIM_PIXEL = 0u;
+const uint DIM_TIME = 1u;
+const uint DIM_LENS = 2u;
+const uint DIM_FIRST_VERTEX = 3u;
 
 // The G-buffer pass's descriptor bindings (gbuffer_layout.glsl, gbuffer.frag; render::gbuffer::GBufferPass).
 const uint GBUFFER_BINDING_DRAWS = 0u;

@@ -2,20 +2,21 @@
 //! `shaders/include/accumulate_layout.glsl` (sizes and offsets pinned by the tests below).
 use glam::Vec4;
 
-/// Light kinds as the shader reads them (`GpuLight::position_kind.w`).
+/// Light kinds as the shader reads them (`GpuLight::position_kind.w`), from shared_constants.glsl.
 pub mod light_kind {
-    pub const POINT: f32 = 0.0;
-    pub const SPOT: f32 = 1.0;
-    pub const DIRECTIONAL: f32 = 2.0;
-    pub const QUAD: f32 = 3.0;
-    pub const DISK: f32 = 4.0;
-    pub const SPHERE: f32 = 5.0;
-    pub const TRIANGLE: f32 = 6.0;
+    use crate::shaders::constants as c;
+    pub const POINT: f32 = c::LIGHT_POINT;
+    pub const SPOT: f32 = c::LIGHT_SPOT;
+    pub const DIRECTIONAL: f32 = c::LIGHT_DIRECTIONAL;
+    pub const QUAD: f32 = c::LIGHT_QUAD;
+    pub const DISK: f32 = c::LIGHT_DISK;
+    pub const SPHERE: f32 = c::LIGHT_SPHERE;
+    pub const TRIANGLE: f32 = c::LIGHT_TRIANGLE;
     /// The environment: the first of a sample's lights when the scene has one.
-    pub const ENVIRONMENT: f32 = 7.0;
+    pub const ENVIRONMENT: f32 = c::LIGHT_ENVIRONMENT;
     /// Two emissive triangles that make a parallelogram with a plain emissive factor (lights::merge_parallelograms),
     /// sampled as one: corner + s·axis_u + t·axis_v for s, t in [0, 1].
-    pub const PARALLELOGRAM: f32 = 8.0;
+    pub const PARALLELOGRAM: f32 = c::LIGHT_PARALLELOGRAM;
 }
 
 /// One light at one sample time, in world space. Area lights carry radiance, point and spot lights intensity,
@@ -129,11 +130,9 @@ pub struct AccumulatePush {
     pub pad: [u32; 2],
 }
 
-/// `pc.direct_light`'s values (accumulate_layout.glsl): multiple importance sampling of lights and BSDF, or
+/// `pc.direct_light`'s values (shared_constants.glsl): multiple importance sampling of lights and BSDF, or
 /// either alone.
-pub const DIRECT_MIS: u32 = 0;
-pub const DIRECT_LIGHT_SAMPLING: u32 = 1;
-pub const DIRECT_BSDF_SAMPLING: u32 = 2;
+pub use crate::shaders::constants::{DIRECT_BSDF_SAMPLING, DIRECT_LIGHT_SAMPLING, DIRECT_MIS};
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

@@ -166,13 +166,15 @@ fn batch_size(pixels: u64, spp: u32) -> u32 {
     ((1u64 << 20) / pixels.max(1)).clamp(1, 8).min(u64::from(spp)) as u32
 }
 
-fn sampler_index(kind: SamplerKind) -> u32 {
+/// The code `pc.sampler_kind` and the sampling probe read for `kind` (`SAMPLER_*`, shared_constants.glsl).
+pub fn sampler_code(kind: SamplerKind) -> u32 {
+    use crate::shaders::constants::*;
     match kind {
-        SamplerKind::Regular => 0,
-        SamplerKind::Random => 1,
-        SamplerKind::Jittered => 2,
-        SamplerKind::MultiJittered => 3,
-        SamplerKind::Sobol => 4,
+        SamplerKind::Regular => SAMPLER_REGULAR,
+        SamplerKind::Random => SAMPLER_RANDOM,
+        SamplerKind::Jittered => SAMPLER_JITTERED,
+        SamplerKind::MultiJittered => SAMPLER_MULTI_JITTERED,
+        SamplerKind::Sobol => SAMPLER_SOBOL,
     }
 }
 
@@ -364,7 +366,7 @@ fn frame_push_constants(settings: &RenderSettings, options: &FrameOptions, backd
         width: settings.width,
         height: settings.height,
         sample_count: settings.spp,
-        sampler_kind: sampler_index(settings.sampler),
+        sampler_kind: sampler_code(settings.sampler),
         seed: seed32(settings.seed),
         indirect: u32::from(settings.indirect),
         direct_light: options.direct_light.shader_value(),

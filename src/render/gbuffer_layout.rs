@@ -1,6 +1,7 @@
 //! The G-buffer's layout, defined once for Rust; mirrored by `shaders/include/gbuffer_layout.glsl` (the tests
 //! below pin sizes and offsets to the GLSL std430 rules).
 use crate::scene::{AlphaMode, BumpDerivative, BumpMap, Material, NoiseKind};
+use crate::shaders::constants as c;
 use ash::vk;
 use glam::{Mat3, Mat4, Vec4};
 
@@ -104,7 +105,7 @@ pub struct GpuBump {
 
 impl GpuBump {
     pub const NONE: GpuBump = GpuBump {
-        kind: -1,
+        kind: c::BUMP_NONE,
         amplitude: 0.0,
         frequency: 1.0,
         octaves: 1,
@@ -118,10 +119,10 @@ impl GpuBump {
         let Some(b) = bump else { return Self::NONE };
         Self {
             kind: match b.kind {
-                NoiseKind::Noise => 0,
-                NoiseKind::Fbm => 1,
-                NoiseKind::Turbulence => 2,
-                NoiseKind::Sine => 3,
+                NoiseKind::Noise => c::BUMP_NOISE,
+                NoiseKind::Fbm => c::BUMP_FBM,
+                NoiseKind::Turbulence => c::BUMP_TURBULENCE,
+                NoiseKind::Sine => c::BUMP_SINE,
             },
             amplitude: b.amplitude,
             frequency: b.frequency,
@@ -129,8 +130,8 @@ impl GpuBump {
             lacunarity: b.lacunarity,
             gain: b.gain,
             derivative: match b.derivative {
-                BumpDerivative::CentralDifferences => 0,
-                BumpDerivative::Analytic => 1,
+                BumpDerivative::CentralDifferences => c::BUMP_CENTRAL_DIFFERENCES,
+                BumpDerivative::Analytic => c::BUMP_ANALYTIC,
             },
             epsilon: b.epsilon,
         }

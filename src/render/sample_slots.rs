@@ -21,9 +21,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 /// Sampler dimensions the host draws once per sample for the whole image (docs/architecture.md's order).
-const DIM_PIXEL: u32 = 0;
-const DIM_TIME: u32 = 1;
-const DIM_LENS: u32 = 2;
+use crate::shaders::constants::{DIM_LENS, DIM_PIXEL, DIM_TIME};
 
 /// The 32-bit seed the shaders hash from the 64-bit setting.
 pub fn seed32(seed: u64) -> u32 {
