@@ -113,7 +113,7 @@ impl RunSummary {
 pub fn select_cases(options: &RunOptions) -> Vec<Case> {
     let chosen: Vec<Case> = cases::all(options.include_test_cases)
         .into_iter()
-        .filter(|c| !options.quick || c.quick || c.kind == Kind::Canary)
+        .filter(|c| !options.quick || c.quick || c.kind() == Kind::Canary)
         .filter(|c| options.cases.as_ref().is_none_or(|r| r.is_match(c.name)))
         .collect();
     let (k, n) = options.fraction;
@@ -290,7 +290,7 @@ impl<'a> Schedule<'a> {
                 Some(e) if attempt == 1 => {
                     let result = CaseResult {
                         case: case.name.into(),
-                        kind: case.kind.name().into(),
+                        kind: case.kind().name().into(),
                         about: case.about.into(),
                         status: Status::Skip,
                         raw: Status::Skip,
@@ -360,7 +360,7 @@ impl<'a> Schedule<'a> {
         };
         let mut result = CaseResult {
             case: case.name.into(),
-            kind: case.kind.name().into(),
+            kind: case.kind().name().into(),
             about: case.about.into(),
             status: expectations::apply(raw, expected),
             raw,
@@ -408,7 +408,7 @@ impl<'a> Schedule<'a> {
 
 /// Golden and AOV cases make goldens (`--bless`).
 fn makes_goldens(case: &Case) -> bool {
-    matches!(case.kind, Kind::Golden | Kind::Aov)
+    matches!(case.kind(), Kind::Golden | Kind::Aov)
 }
 
 /// Two significant digits, rounded up: thresholds read as numbers a person wrote.
