@@ -1,187 +1,46 @@
-//! The contracts between Rust and GLSL, read from the SPIR-V strata embeds: every member offset of the
-//! accumulation pass's push constants and of the structs its buffers hold, the G-buffer and resolve passes' push
-//! constants and records, every pass's descriptor bindings (number and type) and every compute shader's
-//! workgroup size, against the Rust side (`render::accumulate_layout`, `render::gbuffer_layout`, each pass's
-//! `bindings()`, `strata::shaders::constants`). A change made on one side alone fails here. The SPIR-V is walked
-//! by hand (SPIR-V spec 2.3, "Physical Layout"; 3.32, instructions): names, decorations, types, constants,
-//! variables and execution modes are all this needs.
+//! The contracts between Rust and GLSL, read from the SPIR-V strata embeds (through `strata::vk::spirv`, the
+//! walker the passes take their descriptor set layouts from): every member offset of the accumulation pass's push
+//! constants and of the structs its buffers hold, the G-buffer and resolve passes' push constants and records,
+//! that every stage of a pass declares the one layout the pass uses (`bindings()`, reflected) and that a binding
+//! moved in GLSL alone no longer fits the Rust side's descriptor writes (`vk::descriptors::check_write`, which
+//! every write goes through), and every compute shader's workgroup size against the sizes its dispatches divide
+//! by (`strata::shaders::constants`). A change made on one side alone fails here.
 use std::collections::HashMap;
 use std::mem::offset_of;
 use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord, ResolvePush};
 use strata::render::gbuffer_layout::{GBufferDraw, GBufferPush, GpuBump, GpuMaterial};
 use strata::vk::pipeline::Binding;
+use strata::vk::spirv::Module;
 
-const OP_NAME: u32 = 5;
+// The instructions and decorations the tests below patch (SPIR-V spec 3.32, 3.20, 3.6).
 const OP_EXECUTION_MODE: u32 = 16;
-const OP_CONSTANT: u32 = 43;
 const OP_EXECUTION_MODE_ID: u32 = 331;
 const EXECUTION_MODE_LOCAL_SIZE: u32 = 17;
 const EXECUTION_MODE_LOCAL_SIZE_ID: u32 = 38;
-const OP_MEMBER_NAME: u32 = 6;
-const OP_TYPE_IMAGE: u32 = 25;
-const OP_TYPE_SAMPLED_IMAGE: u32 = 27;
-const OP_TYPE_ARRAY: u32 = 28;
-const OP_TYPE_RUNTIME_ARRAY: u32 = 29;
-const OP_TYPE_STRUCT: u32 = 30;
-const OP_TYPE_POINTER: u32 = 32;
-const OP_VARIABLE: u32 = 59;
 const OP_DECORATE: u32 = 71;
 const OP_MEMBER_DECORATE: u32 = 72;
-const OP_TYPE_ACCELERATION_STRUCTURE: u32 = 5341;
-const DECORATION_LOCATION: u32 = 30;
 const DECORATION_BINDING: u32 = 33;
 const DECORATION_OFFSET: u32 = 35;
-const STORAGE_UNIFORM_CONSTANT: u32 = 0;
-const STORAGE_PUSH_CONSTANT: u32 = 9;
-const STORAGE_STORAGE_BUFFER: u32 = 12;
-
-/// What the test reads of one module.
-#[derive(Default)]
-struct Module {
-    names: HashMap<u32, String>,
-    member_names: HashMap<(u32, u32), String>,
-    member_offsets: HashMap<(u32, u32), u32>,
-    bindings: HashMap<u32, u32>,
-    locations: HashMap<u32, u32>,
-    /// Result id → (opcode, operands after the result id).
-    types: HashMap<u32, (u32, Vec<u32>)>,
-    /// (variable id, pointer type id, storage class).
-    variables: Vec<(u32, u32, u32)>,
-    /// A compute shader's LocalSize execution mode, or the ids of its LocalSizeId (glslang's form when the size
-    /// is a named constant): resolved through `constants` by `workgroup_size`.
-    local_size: Option<[u32; 3]>,
-    local_size_ids: Option<[u32; 3]>,
-    /// 32-bit OpConstant values by result id.
-    constants: HashMap<u32, u32>,
-}
-
-fn string(words: &[u32]) -> String {
-    let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).take_while(|b| *b != 0).collect();
-    String::from_utf8(bytes).unwrap()
-}
 
 fn parse(words: &[u32]) -> Module {
-    assert_eq!(words[0], 0x0723_0203, "not SPIR-V");
-    let mut m = Module::default();
-    let mut i = 5;
-    while i < words.len() {
-        let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
-        let w = &words[i + 1..i + count];
-        match op {
-            OP_NAME => {
-                m.names.insert(w[0], string(&w[1..]));
-            }
-            OP_MEMBER_NAME => {
-                m.member_names.insert((w[0], w[1]), string(&w[2..]));
-            }
-            OP_DECORATE if w[1] == DECORATION_BINDING => {
-                m.bindings.insert(w[0], w[2]);
-            }
-            OP_DECORATE if w[1] == DECORATION_LOCATION => {
-                m.locations.insert(w[0], w[2]);
-            }
-            OP_MEMBER_DECORATE if w[2] == DECORATION_OFFSET => {
-                m.member_offsets.insert((w[0], w[1]), w[3]);
-            }
-            OP_VARIABLE => m.variables.push((w[1], w[0], w[2])),
-            OP_EXECUTION_MODE if w[1] == EXECUTION_MODE_LOCAL_SIZE => m.local_size = Some([w[2], w[3], w[4]]),
-            OP_EXECUTION_MODE_ID if w[1] == EXECUTION_MODE_LOCAL_SIZE_ID => {
-                m.local_size_ids = Some([w[2], w[3], w[4]]);
-            }
-            OP_CONSTANT if w.len() == 3 => {
-                m.constants.insert(w[1], w[2]);
-            }
-            OP_TYPE_IMAGE
-            | OP_TYPE_SAMPLED_IMAGE
-            | OP_TYPE_ARRAY
-            | OP_TYPE_RUNTIME_ARRAY
-            | OP_TYPE_STRUCT
-            | OP_TYPE_POINTER
-            | OP_TYPE_ACCELERATION_STRUCTURE => {
-                m.types.insert(w[0], (op, w[1..].to_vec()));
-            }
-            _ => {}
-        }
-        i += count.max(1);
-    }
-    m
-}
-
-impl Module {
-    /// A compute shader's workgroup size, however the module states it.
-    fn workgroup_size(&self) -> Option<[u32; 3]> {
-        self.local_size.or_else(|| self.local_size_ids.map(|ids| ids.map(|id| self.constants[&id])))
-    }
-
-    /// The laid-out struct type named `name` (GLSL's struct or block name): glslang also emits an undecorated
-    /// copy of a struct for local variables, which has no offsets.
-    fn struct_named(&self, name: &str) -> Option<u32> {
-        self.types
-            .iter()
-            .find(|(id, (op, _))| {
-                *op == OP_TYPE_STRUCT
-                    && self.names.get(id).map(String::as_str) == Some(name)
-                    && self.member_offsets.contains_key(&(**id, 0))
-            })
-            .map(|(id, _)| *id)
-    }
-
-    /// Member name → offset of struct `id`.
-    fn offsets(&self, id: u32) -> HashMap<String, u32> {
-        let members = self.types[&id].1.len() as u32;
-        (0..members)
-            .map(|k| {
-                let name = self.member_names.get(&(id, k)).cloned().unwrap_or_else(|| format!("member {k}"));
-                let offset = *self.member_offsets.get(&(id, k)).unwrap_or_else(|| panic!("{name} of %{id}: no offset"));
-                (name, offset)
-            })
-            .collect()
-    }
-
-    /// Strips pointers and arrays: the type a variable holds elements of.
-    fn element(&self, mut id: u32) -> u32 {
-        loop {
-            match &self.types[&id] {
-                (OP_TYPE_POINTER, ops) => id = ops[1],
-                (OP_TYPE_ARRAY | OP_TYPE_RUNTIME_ARRAY, ops) => id = ops[0],
-                _ => return id,
-            }
-        }
-    }
-
-    /// Binding number → (the variable's name or its block's, the Vulkan descriptor type it needs).
-    fn descriptor_bindings(&self) -> HashMap<u32, (String, ash::vk::DescriptorType)> {
-        use ash::vk::DescriptorType as D;
-        let mut out = HashMap::new();
-        for &(var, pointer, storage) in &self.variables {
-            let Some(&binding) = self.bindings.get(&var) else { continue };
-            let element = self.element(pointer);
-            let name = self.names.get(&var).filter(|n| !n.is_empty()).or(self.names.get(&element)).cloned();
-            let kind = match (storage, self.types[&element].0) {
-                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_ACCELERATION_STRUCTURE) => D::ACCELERATION_STRUCTURE_KHR,
-                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_SAMPLED_IMAGE) => D::COMBINED_IMAGE_SAMPLER,
-                // Sampled 2 in OpTypeImage: a storage image.
-                (STORAGE_UNIFORM_CONSTANT, OP_TYPE_IMAGE) if self.types[&element].1[5] == 2 => D::STORAGE_IMAGE,
-                (STORAGE_STORAGE_BUFFER, OP_TYPE_STRUCT) => D::STORAGE_BUFFER,
-                other => panic!("binding {binding}: a kind this test does not know: {other:?}"),
-            };
-            out.insert(binding, (name.unwrap_or_default(), kind));
-        }
-        out
-    }
-
-    /// The push-constant block, where the stage reads one (the optimizer drops it from a stage that does not).
-    fn push_constant_block(&self) -> Option<u32> {
-        let blocks: Vec<u32> =
-            self.variables.iter().filter(|v| v.2 == STORAGE_PUSH_CONSTANT).map(|v| self.element(v.1)).collect();
-        assert!(blocks.len() <= 1, "more than one push-constant block");
-        blocks.first().copied()
-    }
+    strata::vk::spirv::parse(words).unwrap()
 }
 
 fn module(name: &str) -> Module {
     let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == name).unwrap_or_else(|| panic!("no {name}"));
-    parse(&ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap())
+    strata::vk::spirv::parse_bytes(bytes).unwrap()
+}
+
+/// The push-constant block, where the stage reads one (the optimizer drops it from a stage that does not).
+fn push_constant_block(m: &Module) -> Option<u32> {
+    let blocks = m.push_constant_blocks();
+    assert!(blocks.len() <= 1, "more than one push-constant block");
+    blocks.first().copied()
+}
+
+/// Binding number → (name, descriptor type) of what a module declares.
+fn declared(m: &Module) -> HashMap<u32, (String, ash::vk::DescriptorType)> {
+    m.descriptor_bindings().unwrap().into_iter().map(|(b, (name, kind, _))| (b, (name, kind))).collect()
 }
 
 /// `(field name, offset)` of each named field of a Rust struct: GLSL spells its members the same way.
@@ -247,8 +106,9 @@ fn compare(m: &Module, id: u32, rust: &[(&str, usize)]) -> Vec<String> {
 /// Every check of one module; the problems found.
 fn check_module(m: &Module) -> Vec<String> {
     let mut problems: Vec<String> = m
-        .push_constant_block()
-        .map(|block| compare(m, block, &push_offsets()))
+        .push_constant_blocks()
+        .first()
+        .map(|&block| compare(m, block, &push_offsets()))
         .unwrap_or_default()
         .into_iter()
         .map(|p| format!("AccumulatePush.{p}"))
@@ -259,7 +119,7 @@ fn check_module(m: &Module) -> Vec<String> {
             problems.extend(compare(m, id, &rust).into_iter().map(|p| format!("{name}.{p}")));
         }
     }
-    problems.extend(binding_problems(m, &strata::render::accumulate::AccumulatePass::bindings(1)));
+    problems.extend(binding_problems(m, &strata::render::accumulate::AccumulatePass::bindings(1).unwrap()));
     problems
 }
 
@@ -267,7 +127,7 @@ fn check_module(m: &Module) -> Vec<String> {
 /// in the list with the descriptor type it needs.
 fn binding_problems(m: &Module, rust: &[Binding]) -> Vec<String> {
     let mut problems = Vec::new();
-    for (binding, (name, kind)) in m.descriptor_bindings() {
+    for (binding, (name, kind)) in declared(m) {
         match rust.iter().find(|b| b.binding == binding) {
             Some(b) if b.kind == kind => {}
             Some(b) => problems.push(format!("binding {binding} ({name}): GLSL needs {kind:?}, Rust has {:?}", b.kind)),
@@ -282,14 +142,14 @@ fn every_accumulation_stage_agrees_with_the_rust_layouts_and_bindings() {
     for name in ["accumulate.comp", "accumulate.rgen", "accumulate.rahit"] {
         let m = module(name);
         if name != "accumulate.rahit" {
-            assert!(m.push_constant_block().is_some(), "{name} reads no push constants");
+            assert!(push_constant_block(&m).is_some(), "{name} reads no push constants");
         }
         let problems = check_module(&m);
         assert!(problems.is_empty(), "{name} disagrees with the Rust side:\n{}", problems.join("\n"));
     }
     // The compute shader uses every binding the Rust side declares.
-    let used = module("accumulate.comp").descriptor_bindings();
-    for b in strata::render::accumulate::AccumulatePass::bindings(1) {
+    let used = declared(&module("accumulate.comp"));
+    for b in strata::render::accumulate::AccumulatePass::bindings(1).unwrap() {
         assert!(
             used.contains_key(&b.binding),
             "binding {} is declared in Rust but not read by accumulate.comp",
@@ -305,10 +165,14 @@ fn a_change_on_the_glsl_side_alone_is_caught() {
     let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == "accumulate.comp").unwrap();
     let mut words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap();
     let m = parse(&words);
-    let block = m.push_constant_block().expect("accumulate.comp reads push constants");
+    let block = push_constant_block(&m).expect("accumulate.comp reads push constants");
     let seed_member = (0..).find(|k| m.member_names[&(block, *k)] == "seed").unwrap();
-    let camera_var =
-        m.variables.iter().find(|v| m.names.get(&m.element(v.1)).map(String::as_str) == Some("Cameras")).unwrap().0;
+    let camera_var = m
+        .variables
+        .iter()
+        .find(|v| m.element(v.1).and_then(|e| m.names.get(&e)).map(String::as_str) == Some("Cameras"))
+        .unwrap()
+        .0;
     let mut i = 5;
     while i < words.len() {
         let (count, op) = ((words[i] >> 16) as usize, words[i] & 0xffff);
@@ -324,6 +188,12 @@ fn a_change_on_the_glsl_side_alone_is_caught() {
     let problems = check_module(&parse(&words)).join("\n");
     assert!(problems.contains("AccumulatePush.seed: GLSL offset 72, Rust 68"), "{problems}");
     assert!(problems.contains("binding 11 (Cameras): in GLSL, not in Rust"), "{problems}");
+    // The layout the pass would take from that SPIR-V no longer fits the Rust side's write of the cameras.
+    let layout = strata::vk::spirv::descriptor_bindings(&[("patched", bytemuck::cast_slice(&words))], 1).unwrap();
+    let cameras = strata::shaders::constants::ACCUMULATE_BINDING_CAMERAS;
+    let error = strata::vk::descriptors::check_write(&layout, cameras, ash::vk::DescriptorType::STORAGE_BUFFER, 1)
+        .expect_err("the write of a moved binding must not fit");
+    assert!(error.to_string().contains(&format!("declare no binding {cameras}")), "{error}");
 }
 
 /// The G-buffer's attachments: gbuffer.frag writes each at the location the Rust side creates it at
@@ -369,7 +239,7 @@ fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
         ("resolve.comp", resolve, vec![]),
     ] {
         let m = module(name);
-        let block = m.push_constant_block().unwrap_or_else(|| panic!("{name} reads no push constants"));
+        let block = push_constant_block(&m).unwrap_or_else(|| panic!("{name} reads no push constants"));
         problems.extend(compare(&m, block, &push).into_iter().map(|p| format!("{name} push constants: {p}")));
         for (s, rust) in structs {
             let id = m.struct_named(s).unwrap_or_else(|| panic!("{name} holds no {s}"));
@@ -388,18 +258,21 @@ fn every_pass_declares_the_bindings_and_workgroup_size_the_rust_side_uses() {
     use strata::render::{gbuffer::GBufferPass, noise_probe::NoiseProbe, preview::PreviewPass};
     use strata::render::{ray_probe::RayProbe, resolve::ResolvePass};
     use strata::shaders::constants::*;
-    let sampling_probe = vec![Binding::new(SAMPLING_PROBE_BINDING_RESULTS, ash::vk::DescriptorType::STORAGE_BUFFER)];
+    // The sampling probe has no pass of its own: tests/sampling_gpu.rs lays it out from its SPIR-V too.
+    let sampling_probe =
+        strata::vk::spirv::descriptor_bindings(&[("sampling_probe.comp", strata::shaders::SAMPLING_PROBE_COMP)], 1)
+            .unwrap();
     let probe = Some([PROBE_WORKGROUP_SIZE, 1, 1]);
     let passes: [(&[&str], Vec<Binding>, WorkgroupSize); 7] = [
-        (&["gbuffer.vert", "gbuffer.frag"], GBufferPass::bindings(1), None),
-        (&["preview.vert", "preview.frag"], PreviewPass::bindings(1), None),
-        (&["resolve.comp"], ResolvePass::bindings(), Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1])),
-        (&["ray_probe.comp"], RayProbe::bindings(), probe),
-        (&["noise_probe.comp"], NoiseProbe::bindings(), probe),
+        (&["gbuffer.vert", "gbuffer.frag"], GBufferPass::bindings(1).unwrap(), None),
+        (&["preview.vert", "preview.frag"], PreviewPass::bindings(1).unwrap(), None),
+        (&["resolve.comp"], ResolvePass::bindings().unwrap(), Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1])),
+        (&["ray_probe.comp"], RayProbe::bindings().unwrap(), probe),
+        (&["noise_probe.comp"], NoiseProbe::bindings().unwrap(), probe),
         (&["sampling_probe.comp"], sampling_probe, probe),
         (
             &["accumulate.comp"],
-            strata::render::accumulate::AccumulatePass::bindings(1),
+            strata::render::accumulate::AccumulatePass::bindings(1).unwrap(),
             Some([ACCUMULATE_TILE_SIZE, ACCUMULATE_TILE_SIZE, 1]),
         ),
     ];
@@ -421,7 +294,7 @@ fn pass_problems(stages: &[(&str, Module)], rust: &[Binding], local_size: Workgr
     let mut used = std::collections::HashSet::new();
     for (name, m) in stages {
         problems.extend(binding_problems(m, rust).into_iter().map(|p| format!("{name}: {p}")));
-        used.extend(m.descriptor_bindings().into_keys());
+        used.extend(declared(m).into_keys());
         if m.workgroup_size() != local_size {
             problems.push(format!("{name}: workgroup size {:?} in GLSL, {local_size:?} in Rust", m.workgroup_size()));
         }
@@ -465,7 +338,7 @@ fn a_workgroup_size_or_binding_changed_on_the_glsl_side_alone_is_caught() {
     let changed = [("resolve.comp", parse(&words))];
     let problems = pass_problems(
         &changed,
-        &strata::render::resolve::ResolvePass::bindings(),
+        &strata::render::resolve::ResolvePass::bindings().unwrap(),
         Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1]),
     )
     .join("\n");

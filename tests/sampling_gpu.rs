@@ -8,7 +8,7 @@ use strata::math::sampling::{sample_1d, sample_2d};
 use strata::scene::settings::SamplerKind;
 use strata::shaders::constants::{PROBE_WORKGROUP_SIZE, SAMPLING_PROBE_BINDING_RESULTS};
 use strata::vk::commands::{buffer_barrier, submit_and_wait, Access};
-use strata::vk::pipeline::{Binding, Pipeline};
+use strata::vk::pipeline::Pipeline;
 use strata::vk::{Buffer, MemoryLocation};
 
 #[repr(C)]
@@ -28,7 +28,8 @@ fn gpu_samplers_equal_the_rust_twin() {
         device,
         "sampling probe",
         ("sampling_probe.comp", strata::shaders::SAMPLING_PROBE_COMP),
-        &[Binding::new(SAMPLING_PROBE_BINDING_RESULTS, vk::DescriptorType::STORAGE_BUFFER)],
+        &strata::vk::spirv::descriptor_bindings(&[("sampling_probe.comp", strata::shaders::SAMPLING_PROBE_COMP)], 1)
+            .unwrap(),
         16,
     )
     .unwrap();

@@ -174,7 +174,7 @@ impl AccumulatePass {
         let AccumulateVariant { path, primary_rays, alpha_tested, environment, chains, launch, table_shift } = *variant;
         // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4.
         let flag = u32::from;
-        let bindings = Self::bindings(device.texture_array_size());
+        let bindings = Self::bindings(device.texture_array_size())?;
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
         let mode = if primary_rays { " (primary rays)" } else { "" };
         let cpu = device.report.device_type == vk::PhysicalDeviceType::CPU;
@@ -232,26 +232,18 @@ impl AccumulatePass {
         Ok(Self { tracer, gbuffer_sampler, launch, device: device.clone() })
     }
 
-    /// The pass's descriptor bindings, as `shaders/include/accumulate_bindings.glsl` declares them (every stage
-    /// of both ways to trace reads the one set; tests/contracts.rs holds the SPIR-V to this list).
-    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
-    pub fn bindings(texture_array: u32) -> Vec<Binding> {
-        use crate::shaders::constants::*;
-        use vk::DescriptorType as D;
-        vec![
-            Binding::new(ACCUMULATE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
-            // Every G-buffer attachment but the ids, which the next binding reads as unsigned integers.
-            Binding::array(ACCUMULATE_BINDING_GBUFFER, D::COMBINED_IMAGE_SAMPLER, SURFACE_IDS as u32),
-            Binding::new(ACCUMULATE_BINDING_GBUFFER_IDS, D::COMBINED_IMAGE_SAMPLER),
-            Binding::new(ACCUMULATE_BINDING_SUMS, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_MATERIALS, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_LIGHTS, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_PRIMITIVES, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_COUNTERS, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_CAMERAS, D::STORAGE_BUFFER),
-            Binding::new(ACCUMULATE_BINDING_ENVIRONMENT, D::STORAGE_BUFFER),
-            Binding::variable_array(ACCUMULATE_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
-        ]
+    /// The pass's descriptor bindings, as its stages declare them (`shaders/include/accumulate_bindings.glsl`;
+    /// every stage of both ways to trace reads the one set), read from their SPIR-V. `texture_array`: the most
+    /// textures the texture array holds (`Device::texture_array_size`), filled per scene.
+    pub fn bindings(texture_array: u32) -> Result<Vec<Binding>> {
+        let stages = [
+            ("accumulate.comp", shaders::ACCUMULATE_COMP),
+            ("accumulate.rgen", shaders::ACCUMULATE_RGEN),
+            ("accumulate.rchit", shaders::ACCUMULATE_RCHIT),
+            ("accumulate.rahit", shaders::ACCUMULATE_RAHIT),
+            ("accumulate.rmiss", shaders::ACCUMULATE_RMISS),
+        ];
+        crate::vk::spirv::descriptor_bindings(&stages, texture_array)
     }
 
     pub fn path(&self) -> TracePath {

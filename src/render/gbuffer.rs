@@ -129,16 +129,11 @@ const VERTEX_STREAMS: [(u32, vk::Format); 7] = [
 ];
 
 impl GBufferPass {
-    /// The pass's descriptor bindings, as `gbuffer_layout.glsl` and `gbuffer.frag` declare them
-    /// (tests/contracts.rs holds the SPIR-V to this list).
-    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
-    pub fn bindings(texture_array: u32) -> Vec<Binding> {
-        use vk::DescriptorType as D;
-        vec![
-            Binding::new(GBUFFER_BINDING_DRAWS, D::STORAGE_BUFFER),
-            Binding::new(GBUFFER_BINDING_MATERIALS, D::STORAGE_BUFFER),
-            Binding::variable_array(GBUFFER_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
-        ]
+    /// The pass's descriptor bindings, as `gbuffer_layout.glsl` and `gbuffer.frag` declare them, read from their
+    /// SPIR-V. `texture_array`: the most textures the texture array holds (`Device::texture_array_size`).
+    pub fn bindings(texture_array: u32) -> Result<Vec<Binding>> {
+        let stages = [("gbuffer.vert", shaders::GBUFFER_VERT), ("gbuffer.frag", shaders::GBUFFER_FRAG)];
+        crate::vk::spirv::descriptor_bindings(&stages, texture_array)
     }
 
     /// The G-buffer pipeline: one for every scene, whatever its texture count.
@@ -155,7 +150,7 @@ impl GBufferPass {
                 vk::VertexInputAttributeDescription::default().location(i as u32).binding(i as u32).format(*format)
             })
             .collect();
-        let bindings = Self::bindings(device.texture_array_size());
+        let bindings = Self::bindings(device.texture_array_size())?;
         let formats: Vec<vk::Format> = ATTACHMENTS.iter().map(|a| a.format).collect();
         let pipeline = Pipeline::graphics(
             device,

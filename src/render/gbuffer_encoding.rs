@@ -35,11 +35,6 @@ fn sign_not_zero(v: Vec3) -> Vec2 {
     Vec2::new(if v.x >= 0.0 { 1.0 } else { -1.0 }, if v.y >= 0.0 { 1.0 } else { -1.0 })
 }
 
-/// The index of refraction from its 8-bit channel (`unpack_ior`).
-pub fn unpack_ior(packed: f32) -> f32 {
-    1.0 + 3.0 * packed
-}
-
 /// One pixel's channels from its attachments: `floats` the float attachments as read back (sRGB decoded), at
 /// their locations; `ids` the surface ids. Returns the channels at `layout::{POSITION, ...}` and
 /// (instance + 1, material).

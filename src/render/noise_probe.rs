@@ -30,13 +30,9 @@ pub struct NoiseProbe {
 }
 
 impl NoiseProbe {
-    /// The probe's descriptor bindings, as `noise_probe.comp` declares them (tests/contracts.rs holds the SPIR-V
-    /// to this list).
-    pub fn bindings() -> Vec<Binding> {
-        vec![
-            Binding::new(NOISE_PROBE_BINDING_POINTS, vk::DescriptorType::STORAGE_BUFFER),
-            Binding::new(NOISE_PROBE_BINDING_RESULTS, vk::DescriptorType::STORAGE_BUFFER),
-        ]
+    /// The probe's descriptor bindings, as `noise_probe.comp` declares them, read from its SPIR-V.
+    pub fn bindings() -> Result<Vec<Binding>> {
+        crate::vk::spirv::descriptor_bindings(&[("noise_probe.comp", shaders::NOISE_PROBE_COMP)], 1)
     }
 
     pub fn new(device: &Arc<Device>) -> Result<Self> {
@@ -44,7 +40,7 @@ impl NoiseProbe {
             device,
             "noise probe",
             ("noise_probe.comp", shaders::NOISE_PROBE_COMP),
-            &Self::bindings(),
+            &Self::bindings()?,
             std::mem::size_of::<NoiseProbePush>() as u32,
         )?;
         Ok(Self { pipeline, device: device.clone() })

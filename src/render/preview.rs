@@ -55,15 +55,11 @@ pub struct PreviewPass {
 }
 
 impl PreviewPass {
-    /// The pass's descriptor bindings, as `preview_layout.glsl` and `preview.frag` declare them
-    /// (tests/contracts.rs holds the SPIR-V to this list).
-    /// `texture_array`: the size of the texture array (`Device::texture_array_size`), filled per scene.
-    pub fn bindings(texture_array: u32) -> Vec<Binding> {
-        use vk::DescriptorType as D;
-        vec![
-            Binding::new(PREVIEW_BINDING_DRAWS, D::STORAGE_BUFFER),
-            Binding::variable_array(PREVIEW_BINDING_TEXTURES, D::COMBINED_IMAGE_SAMPLER, texture_array.max(1)),
-        ]
+    /// The pass's descriptor bindings, as `preview_layout.glsl` and `preview.frag` declare them, read from their
+    /// SPIR-V. `texture_array`: the most textures the texture array holds (`Device::texture_array_size`).
+    pub fn bindings(texture_array: u32) -> Result<Vec<Binding>> {
+        let stages = [("preview.vert", shaders::PREVIEW_VERT), ("preview.frag", shaders::PREVIEW_FRAG)];
+        crate::vk::spirv::descriptor_bindings(&stages, texture_array)
     }
 
     /// The preview pipeline: one for every scene, whatever its texture count.
@@ -83,7 +79,7 @@ impl PreviewPass {
                 .binding(3)
                 .format(vk::Format::R32G32B32A32_SFLOAT),
         ];
-        let bindings = Self::bindings(device.texture_array_size());
+        let bindings = Self::bindings(device.texture_array_size())?;
         let pipeline = Pipeline::graphics(
             device,
             &GraphicsDesc {

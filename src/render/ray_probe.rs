@@ -59,21 +59,15 @@ pub struct RayProbe {
 }
 
 impl RayProbe {
-    /// The probe's descriptor bindings, as `ray_probe.comp` declares them (tests/contracts.rs holds the SPIR-V
-    /// to this list).
-    pub fn bindings() -> Vec<Binding> {
-        use vk::DescriptorType as D;
-        vec![
-            Binding::new(RAY_PROBE_BINDING_TLAS, D::ACCELERATION_STRUCTURE_KHR),
-            Binding::new(RAY_PROBE_BINDING_RAYS, D::STORAGE_BUFFER),
-            Binding::new(RAY_PROBE_BINDING_HITS, D::STORAGE_BUFFER),
-        ]
+    /// The probe's descriptor bindings, as `ray_probe.comp` declares them, read from its SPIR-V.
+    pub fn bindings() -> Result<Vec<Binding>> {
+        crate::vk::spirv::descriptor_bindings(&[("ray_probe.comp", shaders::RAY_PROBE_COMP)], 1)
     }
 
     pub fn new(device: &Arc<Device>) -> Result<Self> {
         device.require_ray_queries("the ray probe")?;
         let pipeline =
-            Pipeline::compute(device, "ray probe", ("ray_probe.comp", shaders::RAY_PROBE_COMP), &Self::bindings(), 4)?;
+            Pipeline::compute(device, "ray probe", ("ray_probe.comp", shaders::RAY_PROBE_COMP), &Self::bindings()?, 4)?;
         Ok(Self { pipeline, device: device.clone() })
     }
 

@@ -29,14 +29,9 @@ pub struct ResolvePass {
 }
 
 impl ResolvePass {
-    /// The pass's descriptor bindings, as `resolve.comp` declares them (tests/contracts.rs holds the SPIR-V to
-    /// this list).
-    pub fn bindings() -> Vec<Binding> {
-        vec![
-            Binding::new(RESOLVE_BINDING_ACCUMULATION, vk::DescriptorType::STORAGE_IMAGE),
-            Binding::new(RESOLVE_BINDING_DISPLAY, vk::DescriptorType::STORAGE_IMAGE),
-            Binding::new(RESOLVE_BINDING_SUMS, vk::DescriptorType::STORAGE_BUFFER),
-        ]
+    /// The pass's descriptor bindings, as `resolve.comp` declares them, read from its SPIR-V.
+    pub fn bindings() -> Result<Vec<Binding>> {
+        crate::vk::spirv::descriptor_bindings(&[("resolve.comp", shaders::RESOLVE_COMP)], 1)
     }
 
     pub fn new(device: &Arc<Device>) -> Result<Self> {
@@ -44,7 +39,7 @@ impl ResolvePass {
             device,
             "resolve pipeline",
             ("resolve.comp", shaders::RESOLVE_COMP),
-            &Self::bindings(),
+            &Self::bindings()?,
             std::mem::size_of::<ResolvePush>() as u32,
         )?;
         Ok(Self { pipeline, device: device.clone() })

@@ -37,6 +37,24 @@ pub struct DescriptorSet {
     pub raw: vk::DescriptorSet,
     pool: vk::DescriptorPool,
     device: Arc<Device>,
+    /// The layout's bindings (read from the shaders' SPIR-V), which every write is checked against.
+    bindings: Vec<Binding>,
+}
+
+/// Whether a write of `count` descriptors of type `kind` fits `binding` of a set laid out as `layout`: the
+/// layout comes from the shaders (vk::spirv), the writes from Rust, so a binding moved or retyped in GLSL alone
+/// is named here, before the driver sees it.
+pub fn check_write(layout: &[Binding], binding: u32, kind: vk::DescriptorType, count: u32) -> Result<()> {
+    let Some(b) = layout.iter().find(|b| b.binding == binding) else {
+        anyhow::bail!("descriptor write to binding {binding} ({kind:?}): the shaders declare no binding {binding}");
+    };
+    if b.kind != kind {
+        anyhow::bail!("descriptor write to binding {binding} as {kind:?}: the shaders declare it {:?}", b.kind);
+    }
+    if count > b.count {
+        anyhow::bail!("descriptor write of {count} to binding {binding}: the shaders declare {}", b.count);
+    }
+    Ok(())
 }
 
 impl DescriptorSet {
@@ -77,7 +95,15 @@ impl DescriptorSet {
             }
         };
         device.set_name(raw, name);
-        Ok(Self { raw, pool, device: device.clone() })
+        Ok(Self { raw, pool, device: device.clone(), bindings: bindings.to_vec() })
+    }
+
+    /// A write that does not fit the layout is a mistake in strata, not in its input: it stops here, naming the
+    /// binding, rather than reaching the driver.
+    fn expect_fits(&self, binding: u32, kind: vk::DescriptorType, count: u32) {
+        if let Err(e) = check_write(&self.bindings, binding, kind, count) {
+            panic!("{e}");
+        }
     }
 
     /// Points `binding` at a whole storage buffer.
@@ -86,6 +112,7 @@ impl DescriptorSet {
     }
 
     fn buffer(&self, binding: u32, kind: vk::DescriptorType, buffer: &Buffer) -> &Self {
+        self.expect_fits(binding, kind, 1);
         let info = [vk::DescriptorBufferInfo::default().buffer(buffer.raw).offset(0).range(vk::WHOLE_SIZE)];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(self.raw)
@@ -98,6 +125,7 @@ impl DescriptorSet {
 
     /// Points `binding` at a storage image in `GENERAL` layout.
     pub fn storage_image(&self, binding: u32, image: &Image) -> &Self {
+        self.expect_fits(binding, vk::DescriptorType::STORAGE_IMAGE, 1);
         let info = [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)];
         let write = vk::WriteDescriptorSet::default()
             .dst_set(self.raw)
@@ -113,6 +141,7 @@ impl DescriptorSet {
         if images.is_empty() {
             return self;
         }
+        self.expect_fits(binding, vk::DescriptorType::COMBINED_IMAGE_SAMPLER, images.len() as u32);
         let infos: Vec<vk::DescriptorImageInfo> = images
             .iter()
             .map(|&(view, sampler)| {
@@ -133,6 +162,7 @@ impl DescriptorSet {
 
     /// Points `binding` at a top-level acceleration structure.
     pub fn acceleration_structure(&self, binding: u32, tlas: vk::AccelerationStructureKHR) -> &Self {
+        self.expect_fits(binding, vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, 1);
         let structures = [tlas];
         let mut as_info =
             vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&structures);

@@ -12,6 +12,7 @@ pub mod pipeline;
 pub mod readback;
 pub mod sampler;
 pub mod shader_binding_table;
+pub mod spirv;
 pub mod timer;
 pub mod upload;
 pub mod validation;
