@@ -51,7 +51,8 @@ void main() {
     GBufferTexel t;
     t.position = in_world_position;
     t.view_depth = -dot(pc.view_z_row, vec4(in_world_position, 1.0));
-    t.albedo = p.base;
+    // What the BRDF reads: the base colour, or nothing for an unlit material (its colour is its emission).
+    t.albedo = vec4(p.shading.albedo, p.base.a);
     t.metallic = p.shading.metallic;
     t.roughness = p.shading.roughness;
     t.transmission = p.shading.transmission;

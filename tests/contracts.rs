@@ -75,12 +75,11 @@ fn struct_offsets() -> Vec<(&'static str, Vec<(&'static str, usize)>)> {
 }
 
 fn material_offsets() -> Vec<(&'static str, usize)> {
-    let mut v = of!(GpuMaterial; base_color, emissive, metallic, roughness, transmission, ior, normal_scale,
+    let v = of!(GpuMaterial; base_color, emissive, metallic, roughness, transmission, ior, normal_scale,
         alpha_cutoff, alpha_mode, double_sided, base_color_texture, transmission_texture, normal_texture,
         emissive_texture, base_color_uv_rows, bump, metallic_roughness_texture, specular_texture,
         specular_color_texture, metallic_roughness_uv_rows, normal_uv_rows, emissive_uv_rows, transmission_uv_rows,
-        specular_color, specular_uv_rows, specular_color_uv_rows);
-    v.push(("pad0", offset_of!(GpuMaterial, pad)));
+        specular_color, specular_uv_rows, specular_color_uv_rows, unlit);
     v
 }
 

@@ -291,3 +291,26 @@ fn a_child_listed_as_a_scene_root_is_drawn_once_as_a_child_with_a_warning() {
         scene.warnings
     );
 }
+
+/// KHR_materials_unlit is read (no "not supported" warning), and written back by the exporter.
+#[test]
+fn unlit_materials_are_read_and_written() {
+    let dir = temp_dir("unlit");
+    let bin = buffer();
+    std::fs::write(dir.join("data.bin"), &bin).unwrap();
+    let mut doc = document(json!({"byteLength": bin.len(), "uri": "data.bin"}));
+    doc["extensionsUsed"].as_array_mut().unwrap().push(json!("KHR_materials_unlit"));
+    doc["materials"][0]["extensions"]["KHR_materials_unlit"] = json!({});
+    let path = dir.join("unlit.gltf");
+    std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let scene = strata::load_scene(&path).unwrap();
+    assert!(scene.materials[0].unlit, "the material is unlit");
+    assert!(!scene.warnings.iter().any(|w| w.contains("unlit")), "{:?}", scene.warnings);
+
+    let mut library = strata::scene::library::cornell();
+    library.materials[0].unlit = true;
+    let exported = dir.join("cornell-unlit.gltf");
+    strata::scene::gltf_export::write_gltf(&library, &exported).unwrap();
+    let back = strata::load_scene(&exported).unwrap();
+    assert!(back.materials[0].unlit && !back.materials[1].unlit, "the exporter writes KHR_materials_unlit");
+}

@@ -398,6 +398,40 @@ fn a_second_frame_on_one_device_reuses_the_compute_pipelines_and_matches_the_fir
 
 /// The ray log the benchmark replays (render::ray_log): exactly the rays the pass counts, each a unit direction
 /// with a sane interval, shadow rays flagged to end at their first hit; and logging leaves the picture untouched.
+/// KHR_materials_unlit: an unlit ground shows its base colour as radiance, whatever the light (the same bits
+/// under a light ten times brighter), in both primary modes; a lit ground of the same colour does not.
+#[test]
+fn an_unlit_surface_shows_its_base_colour_whatever_the_light_in_both_modes() {
+    use strata::check::optics::shadow_scene;
+    use strata::scene::LightShape;
+    let gpu = GpuTest::new();
+    let colour = Vec3::new(0.2, 0.5, 0.8);
+    let ground = |emission: f32, unlit: bool| {
+        let mut scene = shadow_scene(LightShape::Point { radius: 0.1 }, emission, false);
+        for m in &mut scene.materials {
+            m.base_color = colour.extend(1.0);
+            m.unlit = unlit;
+        }
+        scene
+    };
+    for primary in [Primary::Raster, Primary::Rays] {
+        let s = RenderSettings { primary, ..settings(24, 24, 4, SamplerKind::MultiJittered) };
+        let dim = render(gpu.device(), &ground(1.0, true), &s);
+        let bright = render(gpu.device(), &ground(10.0, true), &s);
+        assert!(dim.linear == bright.linear, "{primary:?}: the light changed an unlit surface");
+        // The raster mode's G-buffer holds emission in half floats: within 2^-11 of the colour, relatively.
+        let tolerance = colour * 2f32.powi(-11) + Vec3::splat(1e-6);
+        for (i, p) in dim.linear.pixels.iter().enumerate() {
+            let got = Vec3::new(p[0], p[1], p[2]);
+            assert!((got - colour).abs().cmple(tolerance).all(), "{primary:?}: pixel {i} is {got}, not {colour}");
+        }
+        let lit = render(gpu.device(), &ground(1.0, false), &s);
+        let got = Vec3::from_slice(&lit.linear.pixels[0][..3]);
+        assert!((got - colour).abs().max_element() > 0.01, "{primary:?}: a lit ground shows {got} as well");
+    }
+    gpu.finish().unwrap();
+}
+
 /// A frame's device memory beyond the scene: at most 100 bytes per pixel with the 32 of the fixed-point sums
 /// (issue 30), in both primary modes. (In the raster mode the resolve writes its linear mean over the G-buffer's
 /// position attachment; tests/scale_out.rs holds that picture to the one a merge resolves into images of its

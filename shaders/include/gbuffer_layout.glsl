@@ -25,7 +25,7 @@ struct GpuMaterial {
     float ior;
     float normal_scale;
     float alpha_cutoff;
-    int alpha_mode;          // 0 opaque, 1 mask, 2 blend
+    int alpha_mode;          // ALPHA_OPAQUE, ALPHA_MASK or ALPHA_BLEND (shared_constants.glsl)
     int double_sided;
     int base_color_texture;  // -1: none
     int transmission_texture;  // R scales the transmission factor (KHR_materials_transmission); -1: none
@@ -36,7 +36,7 @@ struct GpuMaterial {
     int metallic_roughness_texture;  // roughness in G, metalness in B (glTF 2.0 §3.9.2); -1: none
     int specular_texture;    // A scales the specular factor (KHR_materials_specular); -1: none
     int specular_color_texture;  // RGB scales the specular colour (KHR_materials_specular); -1: none
-    int pad0;
+    int unlit;               // 1: KHR_materials_unlit (material.glsl)
     // Each texture's KHR_texture_transform (transform_uv), identity without one; the spare w of the first row
     // names the UV set (reads_uv1), of the second the texture's level-of-detail offset (texture_lod).
     vec4 metallic_roughness_uv_rows[2];

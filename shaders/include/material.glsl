@@ -1,5 +1,5 @@
 // The one material evaluation: what a glTF metallic-roughness material (glTF 2.0 §3.9, with
-// KHR_materials_transmission, _ior, _specular and KHR_texture_transform) and its Blinn bump (Blinn 1978) make of a
+// KHR_materials_transmission, _ior, _specular, _unlit and KHR_texture_transform) and its Blinn bump (Blinn 1978) make of a
 // surface point. The G-buffer pass (gbuffer.frag) and every ray hit (path_tracer.glsl's hit_surface) call it, so a
 // surface looks the same seen directly, in a mirror or through glass.
 //
@@ -16,8 +16,8 @@ vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod);
 // The alpha test of glTF's alpha modes: MASK keeps what reaches the cutoff; BLEND is drawn as coverage at 0.5
 // (no order-independent transparency). Opaque materials pass.
 bool alpha_test_passes(GpuMaterial m, float alpha) {
-    if (m.alpha_mode == 0) return true;
-    return alpha >= (m.alpha_mode == 1 ? m.alpha_cutoff : 0.5);
+    if (m.alpha_mode == ALPHA_OPAQUE) return true;
+    return alpha >= (m.alpha_mode == ALPHA_MASK ? m.alpha_cutoff : 0.5);
 }
 
 // A material at one surface point.
@@ -100,6 +100,16 @@ MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2
                                                   m.specular_color_uv_rows, footprint_lod).rgb;
     }
     p.shading.specular_color = m.specular_color.rgb * p.specular_color_texel;
+    if (m.unlit != 0) {
+        // KHR_materials_unlit: the base colour is what the surface shows, as radiance; it reflects and transmits
+        // nothing (specular 0 is F0 = F90 = 0, brdf.glsl). It is no light: light sampling never picks it (its
+        // emissive factor is not read), so it reaches other surfaces only through their BSDF samples.
+        p.emission = p.base.rgb;
+        p.shading.albedo = vec3(0.0);
+        p.shading.metallic = 0.0;
+        p.shading.transmission = 0.0;
+        p.shading.specular = 0.0;
+    }
     return p;
 }
 #endif

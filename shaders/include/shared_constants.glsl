@@ -76,6 +76,12 @@ const int BUMP_TURBULENCE = 2;
 const int BUMP_SINE = 3;
 const int BUMP_CENTRAL_DIFFERENCES = 0;
 const int BUMP_ANALYTIC = 1;
+// A material's texture index where it has no such texture (GpuMaterial, PreviewDraw; shaders test `>= 0`).
+const int NO_TEXTURE = -1;
+// glTF alpha modes (GpuMaterial.alpha_mode; material.glsl's alpha test; render::gbuffer_layout::GpuMaterial).
+const int ALPHA_OPAQUE = 0;
+const int ALPHA_MASK = 1;
+const int ALPHA_BLEND = 2;
 // Sampler kinds (pc.sampler; sampling.glsl and its Rust twin math::sampling).
 const uint SAMPLER_REGULAR = 0u;
 const uint SAMPLER_RANDOM = 1u;

@@ -166,7 +166,8 @@ pub struct GpuMaterial {
     pub specular_texture: i32,
     /// Its RGB scales the specular colour (KHR_materials_specular); -1: none.
     pub specular_color_texture: i32,
-    pub pad: i32,
+    /// 1: KHR_materials_unlit (the base colour as radiance, no reflection); 0 otherwise.
+    pub unlit: i32,
     /// Each texture's KHR_texture_transform: the first two rows of its 3×3 matrix (identity without one).
     pub metallic_roughness_uv_rows: [Vec4; 2],
     pub normal_uv_rows: [Vec4; 2],
@@ -182,7 +183,7 @@ impl GpuMaterial {
     /// `texture_sizes`: width and height of each of the scene's textures, in texels (level 0).
     pub fn new(m: &Material, texture_sizes: &[(u32, u32)]) -> Self {
         let texture = |t: Option<crate::scene::TextureRef>| {
-            t.filter(|t| t.texture < texture_sizes.len()).map(|t| t.texture as i32).unwrap_or(-1)
+            t.filter(|t| t.texture < texture_sizes.len()).map(|t| t.texture as i32).unwrap_or(c::NO_TEXTURE)
         };
         // The first row's spare w says which UV set the texture reads: 1 for TEXCOORD_1, else TEXCOORD_0 (the
         // importer warns about the sets strata does not load). The second row's holds the texture's level of
@@ -194,13 +195,14 @@ impl GpuMaterial {
             [uv.row(0).extend(set), uv.row(1).extend(texel_lod_offset(size, uv))]
         };
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
-            AlphaMode::Opaque => (0, 0.0),
-            AlphaMode::Mask { cutoff } => (1, cutoff),
-            AlphaMode::Blend => (2, 0.5),
+            AlphaMode::Opaque => (c::ALPHA_OPAQUE, 0.0),
+            AlphaMode::Mask { cutoff } => (c::ALPHA_MASK, cutoff),
+            AlphaMode::Blend => (c::ALPHA_BLEND, 0.5),
         };
         Self {
             base_color: m.base_color,
-            emissive: m.emissive.extend(m.specular),
+            // An unlit material's emissive factor means nothing (KHR_materials_unlit): it is no light.
+            emissive: if m.unlit { glam::Vec3::ZERO } else { m.emissive }.extend(m.specular),
             metallic: m.metallic,
             roughness: m.roughness,
             transmission: m.transmission,
@@ -218,7 +220,7 @@ impl GpuMaterial {
             metallic_roughness_texture: texture(m.metallic_roughness_texture),
             specular_texture: texture(m.specular_texture),
             specular_color_texture: texture(m.specular_color_texture),
-            pad: 0,
+            unlit: i32::from(m.unlit),
             metallic_roughness_uv_rows: uv_rows(m.metallic_roughness_texture),
             // The tangent frame (dpdu, dpdv) follows TEXCOORD_0, so normal textures read it.
             normal_uv_rows: uv_rows(m.normal_texture.map(|t| crate::scene::TextureRef { tex_coord: 0, ..t })),

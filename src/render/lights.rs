@@ -163,7 +163,7 @@ fn push_emissive_triangles(
             // Chosen by the factor's power over the whole triangle; the shader scales each sample by the
             // emissive texture at the point it landed on, and drops it where alpha-masking cuts the surface
             // out (rays pass there), which keeps the estimate unbiased.
-            if luminance(material.emissive) <= 0.0 {
+            if luminance(material.emissive) <= 0.0 || material.unlit {
                 continue;
             }
             let first_of_primitive = lights.len();
@@ -292,6 +292,16 @@ mod tests {
     fn lights_at_rest(scene: &Scene) -> LightSet {
         let rest = scene.node_world_transforms(None);
         LightSet::at(scene, &rest, &scene.instance_transforms_from(&rest), &rest, 1.0)
+    }
+
+    /// KHR_materials_unlit: an unlit emissive material is no light (its emissive factor means nothing).
+    #[test]
+    fn an_unlit_material_is_no_light() {
+        let mut scene = library::cornell();
+        let lamp = scene.materials.iter().position(|m| m.is_emissive()).expect("the Cornell box has a lamp");
+        assert!(!lights_at_rest(&scene).lights.is_empty());
+        scene.materials[lamp].unlit = true;
+        assert!(lights_at_rest(&scene).lights.is_empty(), "an unlit lamp was sampled as a light");
     }
 
     #[test]

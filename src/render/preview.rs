@@ -226,7 +226,7 @@ fn draw_records(
                 view_normal_rows: [0, 1, 2].map(|r| view_normal.row(r).extend(0.0)),
                 base_color: material.base_color,
                 uv_transform_rows: [uv.row(0).extend(0.0), uv.row(1).extend(0.0)],
-                base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(-1),
+                base_color_texture: texture.map(|t| t.texture as i32).unwrap_or(crate::shaders::constants::NO_TEXTURE),
                 pad: [0; 3],
             });
             reads_uv1.push(texture.is_some_and(|t| t.tex_coord == 1));

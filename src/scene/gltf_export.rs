@@ -166,6 +166,10 @@ fn material_json(m: &super::Material) -> Result<(Value, Vec<&'static str>)> {
     if m.double_sided {
         material["doubleSided"] = json!(true);
     }
+    if m.unlit {
+        extensions.insert("KHR_materials_unlit".into(), json!({}));
+        used.push("KHR_materials_unlit");
+    }
     if !extensions.is_empty() {
         material["extensions"] = Value::Object(extensions);
     }

@@ -13,12 +13,13 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 6] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 7] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_materials_transmission",
+    "KHR_materials_unlit",
     "KHR_texture_transform",
 ];
 

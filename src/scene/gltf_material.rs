@@ -199,6 +199,7 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
             .unwrap_or(defaults.specular_color),
         specular_color_texture: m.specular().and_then(|s| s.specular_color_texture()).as_ref().map(texture_ref),
         bump: None,
+        unlit: m.unlit(),
     })
 }
 

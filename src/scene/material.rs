@@ -193,6 +193,9 @@ pub struct Material {
     pub specular_color_texture: Option<TextureRef>,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
+    /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
+    /// whatever the light, and reflects nothing.
+    pub unlit: bool,
 }
 
 impl Default for Material {
@@ -221,6 +224,7 @@ impl Default for Material {
             specular_color: Vec3::ONE,
             specular_color_texture: None,
             bump: None,
+            unlit: false,
         }
     }
 }
