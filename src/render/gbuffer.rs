@@ -376,7 +376,8 @@ impl GBufferPass {
             (0..super::gbuffer_layout::CHANNELS).map(|_| Vec::with_capacity(surface_ids.len())).collect();
         let mut ids = Vec::with_capacity(surface_ids.len());
         for (pixel, surface) in surface_ids.iter().enumerate() {
-            let texel: Vec<[f32; 4]> = floats.iter().map(|f| f[pixel]).collect();
+            // The float attachments are every one before the surface ids.
+            let texel: [[f32; 4]; attachment::SURFACE_IDS] = std::array::from_fn(|a| floats[a][pixel]);
             let (decoded, pixel_ids) = super::gbuffer_encoding::decode_texel(&texel, *surface);
             for (channel, value) in channels.iter_mut().zip(decoded) {
                 channel.push(value);
