@@ -413,7 +413,6 @@ struct FrameTargets {
     own_accumulation: Option<Image>,
     display: Image,
     extent: vk::Extent2D,
-    traced: bool,
 }
 
 impl FrameTargets {
@@ -443,7 +442,6 @@ impl FrameTargets {
             own_accumulation,
             display: Image::new_2d(device, "display", vk::Format::R8G8B8A8_UNORM, extent, storage)?,
             extent,
-            traced,
         })
     }
 
@@ -484,7 +482,10 @@ impl FrameTargets {
 
     /// Bytes of the per-pixel images: G-buffer (none in the reference mode) or the float image, display, sums.
     fn image_bytes(&self) -> u64 {
-        let gbuffer_or_float = if self.traced { 16 } else { super::gbuffer_layout::bytes_per_pixel() as u64 };
+        let gbuffer_or_float = match self.own_accumulation {
+            Some(_) => 16,
+            None => super::gbuffer_layout::bytes_per_pixel() as u64,
+        };
         u64::from(self.extent.width)
             * u64::from(self.extent.height)
             * (gbuffer_or_float + 4 + crate::partial::BYTES_PER_PIXEL)
