@@ -29,9 +29,10 @@ shared vec3 group_chain_radiance[GROUP_SIZE];
 shared uint group_shadow_rays;
 shared uint group_secondary_rays;
 
-// One 8×8 tile of pixels, shaded by the workgroup (each lane its pixel): the visible surfaces' own light, then
-// their chains, packed. Called in uniform control flow: it holds the barriers around the packing.
-void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secondary_rays) {
+// One path of each pixel of an 8×8 tile, shaded by the workgroup (each lane its pixel): the visible surfaces'
+// own light, then their chains, packed. Returns the lane's path value. Called in uniform control flow (`last_path`
+// too): it holds the barriers around the packing.
+vec4 shade_tile(uvec2 pixel, uint lane, bool last_path, inout uint shadow_rays, inout uint secondary_rays) {
     bool in_image = pixel.x < pc.width && pixel.y < pc.height;
     vec4 value = vec4(0.0);
     bool chain = false;
@@ -40,11 +41,8 @@ void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secon
         value = shade_primary(pixel, lane, r, chain, shadow_rays);
         if (CHAINS != 0u && chain) group_chains[atomicAdd(group_chain_count, 1u)] = r;
     }
-    if (CHAINS == 0u) {
-        // Nothing to pack: no barriers (uniform: a specialization constant).
-        if (in_image) accumulate_sample(pixel, value);
-        return;
-    }
+    // Nothing to pack: no barriers (uniform: a specialization constant).
+    if (CHAINS == 0u) return path_value(value);
     memoryBarrierShared();
     barrier();
 
@@ -56,10 +54,27 @@ void shade_tile(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secon
     memoryBarrierShared();
     barrier();
 
-    if (in_image) {
-        if (chain) value.rgb += group_chain_radiance[lane];
-        accumulate_sample(pixel, value);
+    if (chain) value.rgb += group_chain_radiance[lane];
+    if (!last_path) {
+        // Every lane has read its chain's radiance before the tile's next path packs its own (after the last,
+        // taking the next tile does this).
+        barrier();
+        if (lane == 0u) group_chain_count = 0u;
+        memoryBarrierShared();
+        barrier();
     }
+    return path_value(value);
+}
+
+// A tile's camera sample: pc.shading_samples paths from each pixel's visible surface, their mean into the sums.
+void shade_tile_sample(uvec2 pixel, uint lane, inout uint shadow_rays, inout uint secondary_rays) {
+    vec4 paths_sum = vec4(0.0);
+    // Uniform: a push constant.
+    for (uint k = 0u; k < pc.shading_samples; k++) {
+        begin_path(k);
+        paths_sum += shade_tile(pixel, lane, k + 1u == pc.shading_samples, shadow_rays, secondary_rays);
+    }
+    if (pixel.x < pc.width && pixel.y < pc.height) accumulate_sample(pixel, paths_sum, pc.shading_samples);
 }
 
 // The tile the workgroup shades next, row by row over the image, from this sample's tile counter.
@@ -91,8 +106,8 @@ void main() {
         barrier();
         uint tile = group_tile;
         if (tile >= tiles) break;
-        shade_tile(uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy, lane,
-                   shadow_rays, secondary_rays);
+        shade_tile_sample(uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy,
+                          lane, shadow_rays, secondary_rays);
         // Every lane has read the tile and its chains' radiance before lane 0 takes the next.
         barrier();
     }

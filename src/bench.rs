@@ -143,11 +143,6 @@ pub fn time_frame(
     trace: crate::scene::settings::Trace,
     probe: bool,
 ) -> Result<FrameFigure> {
-    use crate::render::frame::{render_frame, FrameOptions};
-    use crate::render::ray_probe::{ProbeRay, RayProbe};
-    let device = &gpu.device;
-    let on_gpu = SceneOnGpu::upload(device, scene)?;
-    let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
     let settings = crate::scene::settings::RenderSettings {
         width,
         height,
@@ -157,6 +152,23 @@ pub fn time_frame(
         trace,
         ..Default::default()
     };
+    time_frame_with(gpu, scene, &settings, probe)
+}
+
+/// [`time_frame`] with any settings (the benchmark's own: jittered, still defaults otherwise).
+pub fn time_frame_with(
+    gpu: &Gpu,
+    scene: &Scene,
+    settings: &crate::scene::settings::RenderSettings,
+    probe: bool,
+) -> Result<FrameFigure> {
+    use crate::render::frame::{render_frame, FrameOptions};
+    use crate::render::ray_probe::{ProbeRay, RayProbe};
+    let (width, height, spp) = (settings.width, settings.height, settings.spp);
+    let settings = settings.clone();
+    let device = &gpu.device;
+    let on_gpu = SceneOnGpu::upload(device, scene)?;
+    let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
     let options = FrameOptions { timestamps: true, ..Default::default() };
     let frame = render_frame(device, scene, &on_gpu, &settings, &options, &mut |_, _| true)?;
     let stats = frame.stats;

@@ -52,9 +52,8 @@ macro_rules! of {
 fn push_offsets() -> Vec<(&'static str, usize)> {
     let mut v = of!(AccumulatePush; eye, forward, background, width, height, sample_index, sample_count, sampler_kind,
         seed, light_offset, light_count, analytic_light_count, counter_slot, max_depth, total_light_power, ray_log,
-        indirect, direct_light, alpha_moment, sabotage);
-    let pad = offset_of!(AccumulatePush, pad);
-    v.extend([("pad_end0", pad), ("pad_end1", pad + 4)]);
+        indirect, direct_light, alpha_moment, sabotage, shading_samples);
+    v.push(("pad_end1", offset_of!(AccumulatePush, pad)));
     v
 }
 

@@ -507,7 +507,9 @@ fn the_ray_log_holds_every_ray_the_pass_casts_and_only_observes() {
 /// it runs dry; through the ray-tracing pipeline, rows of 8 invocations take 8-pixel runs in turn. How the work
 /// is spread must not matter: one workgroup doing everything, a few, the device's default, more than there are
 /// tiles, and a GPU's launch (one workgroup per tile, one invocation per pixel) give the same bits and count the
-/// same rays, both ways to trace, in both primary modes, on an image whose edge tiles are partial.
+/// same rays, both ways to trace, in both primary modes, on an image whose edge tiles are partial; with one path
+/// per camera sample and with three (`--shading-samples`, whose paths pack their chains tile by tile in turn),
+/// and both ways to trace agree on the bits.
 #[test]
 fn the_picture_does_not_depend_on_how_the_work_is_spread_over_invocations() {
     use strata::render::accumulate::AccumulateLaunch;
@@ -518,13 +520,16 @@ fn the_picture_does_not_depend_on_how_the_work_is_spread_over_invocations() {
     // 45x29 pixels: 6x4 = 24 tiles, the last column and row partial.
     let tiles = 24;
     let paths = strata::render::accumulate::TracePath::available(gpu.device());
-    for (path, primary) in paths.iter().flat_map(|p| [(*p, Primary::Raster), (*p, Primary::Rays)]) {
+    let mut by_path: Vec<(Primary, u32, Vec<[f32; 4]>)> = Vec::new();
+    let cases = [Primary::Raster, Primary::Rays].into_iter().flat_map(|primary| [(primary, 1), (primary, 3)]);
+    for ((primary, shading_samples), path) in cases.flat_map(|c| paths.iter().map(move |p| (c, *p))) {
         // A background no surface shows, so a pixel nothing shaded (the image is never cleared) stands out.
         let background = Vec3::new(0.25, 0.5, 0.75);
         let s = RenderSettings {
             primary,
             background,
             trace: path.as_trace(),
+            shading_samples,
             ..settings(45, 29, 2, SamplerKind::MultiJittered)
         };
         let frame = |launch: AccumulateLaunch| {
@@ -540,11 +545,27 @@ fn the_picture_does_not_depend_on_how_the_work_is_spread_over_invocations() {
         let launches = [1, 3, tiles, tiles + 7].map(AccumulateLaunch::Workgroups);
         for launch in launches.into_iter().chain([AccumulateLaunch::OnePerTileOrPixel]) {
             let other = frame(launch);
-            assert!(other.linear == default.linear, "{path:?} {primary:?}: {launch:?} changed the picture");
+            assert!(
+                other.linear == default.linear,
+                "{path:?} {primary:?} x{shading_samples}: {launch:?} changed the picture"
+            );
             let rays = |f: &strata::render::frame::RenderedFrame| (f.stats.shadow_rays, f.stats.secondary_rays);
-            assert_eq!(rays(&other), rays(&default), "{path:?} {primary:?}: {launch:?} counted other rays");
+            assert_eq!(
+                rays(&other),
+                rays(&default),
+                "{path:?} {primary:?} x{shading_samples}: {launch:?} counted other rays"
+            );
+        }
+        match by_path.iter().find(|(p, k, _)| (*p, *k) == (primary, shading_samples)) {
+            Some((_, _, first)) => {
+                assert!(first == &default.linear.pixels, "{path:?} {primary:?}: not the other path's bits")
+            }
+            None => by_path.push((primary, shading_samples, default.linear.pixels.clone())),
         }
     }
+    // Three paths a sample are not one path thrice: they draw their own light and lobe samples.
+    let pictures = |k: u32| by_path.iter().filter(move |(_, s, _)| *s == k).map(|(_, _, p)| p);
+    assert!(pictures(1).zip(pictures(3)).all(|(a, b)| a != b), "three paths per sample repeated the first");
     drop(on_gpu);
     gpu.finish().unwrap();
 }

@@ -82,9 +82,11 @@ fn splits_merge_to_the_single_run_bytes_raster_primary() {
     splits_merge_to_the_single_run("raster", &RASTER);
 }
 
+/// Two paths per camera sample: a part holds whole camera samples, each the mean of its paths.
 #[test]
-fn splits_merge_to_the_single_run_bytes_ray_primary() {
-    splits_merge_to_the_single_run("rays", &["--size", "40x30", "--spp", "64", "--indirect", "--primary", "rays"]);
+fn splits_merge_to_the_single_run_bytes_ray_primary_two_paths_per_sample() {
+    let frame = ["--size", "40x30", "--spp", "64", "--indirect", "--primary", "rays", "--shading-samples", "2"];
+    splits_merge_to_the_single_run("rays", &frame);
 }
 
 /// Replaces the first `from` in the file with `to` (the same length): a header field edited in place.

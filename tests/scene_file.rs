@@ -128,12 +128,14 @@ fn the_render_table_chooses_traced_primary_rays_and_interreflection() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("traced.toml");
     let gltf = root.join("scenes/cornell.gltf");
-    let render = "[render]\nprimary = \"rays\"\nindirect = true\nbounces = 6\n";
+    let render = "[render]\nprimary = \"rays\"\nindirect = true\nbounces = 6\nshading_samples = 4\n";
     std::fs::write(&path, format!("gltf = {:?}\n{render}", gltf.to_str().unwrap())).unwrap();
     let loaded = strata::load(&path, &Default::default()).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(loaded.settings.primary, Some(Primary::Rays));
     assert_eq!((loaded.settings.indirect, loaded.settings.bounces), (Some(true), Some(6)));
+    assert_eq!(loaded.settings.shading_samples, Some(4));
+    assert_eq!(RenderSettings::default().shading_samples, 1, "one path per camera sample unless asked");
     assert!(RenderSettings::default().with(&loaded.settings).indirect);
     assert!(!RenderSettings::default().indirect, "Cook's effects alone unless asked");
 }
@@ -189,6 +191,7 @@ fn the_environment_table_and_background_words_land_where_the_renderer_reads_them
         ("[environment]\nintensity = 2.0\n", "[environment] needs one of file"),
         ("[environment]\nbuiltin = \"studio\"\nintensity = -1.0\n", ":4:13: intensity = -1 is out of range"),
         ("[render]\nbackground = \"sky\"\n", ":3:14: background must be [r, g, b]"),
+        ("[render]\nshading_samples = 0\n", ":3:19: shading_samples = 0 is out of range"),
         ("[render]\nbackground = [1.0, -1.0, 0.0]\n", ":3:14: background must be"),
     ] {
         let path = write("bad.toml", body);

@@ -14,6 +14,11 @@ Not part of the test suite (it needs `pip install mitsuba OpenEXR numpy scipy` a
 repository root after `cargo build --release`:
 
     python3 scripts/reference/equal_error_mitsuba.py [--size 512] [--spp 16 64] [--strata target/release/strata]
+        [--shading-samples K] [--emitter-samples K]
+
+With --shading-samples K strata renders N/K camera samples of K paths each (`--shading-samples`), so that both
+renderers take N light samples per pixel at "N spp"; --emitter-samples K gives Mitsuba's `direct` integrator
+N/K camera samples of K emitter and K BSDF samples each, its own way to do the same.
 """
 import argparse
 import json
@@ -39,8 +44,9 @@ import mitsuba as mi
 mi.set_variant("llvm_ad_rgb")
 sys.path.insert(0, sys.argv[1])
 import cornell_mitsuba as cornell
-size, spp, seed, out = int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
-scene = cornell.mitsuba_scene_dict(size, spp, integrator={"type": "direct"}, sampler="multijitter")
+size, spp, seed, out, k = int(sys.argv[2]), int(sys.argv[3]), int(sys.argv[4]), sys.argv[5], int(sys.argv[6])
+integrator = {"type": "direct", "emitter_samples": k, "bsdf_samples": k}
+scene = cornell.mitsuba_scene_dict(size, spp // k, integrator=integrator, sampler="multijitter")
 image = mi.render(mi.load_dict(scene), seed=seed)
 np.save(out, np.array(image)[..., :3].astype(np.float64))
 """
@@ -52,15 +58,17 @@ def run_timed(cmd):
     return time.perf_counter() - start
 
 
-def strata_image(strata, gltf, size, spp, seed, out):
-    seconds = run_timed([strata, "render", gltf, "--size", f"{size}x{size}", "--spp", str(spp), "--seed", str(seed),
-                         "--bounces", "0", "--background", "0,0,0", "-o", out, "--quiet"])
+def strata_image(strata, gltf, size, spp, seed, out, paths=1):
+    seconds = run_timed([strata, "render", gltf, "--size", f"{size}x{size}", "--spp", str(spp // paths),
+                         "--shading-samples", str(paths), "--seed", str(seed), "--bounces", "0",
+                         "--background", "0,0,0", "-o", out, "--quiet"])
     return cornell.read_exr_rgb(out), seconds
 
 
-def mitsuba_image(size, spp, seed, out):
+def mitsuba_image(size, spp, seed, out, emitter_samples=1):
     here = os.path.dirname(os.path.abspath(__file__))
-    seconds = run_timed([sys.executable, "-c", MITSUBA_CHILD, here, str(size), str(spp), str(seed), out])
+    seconds = run_timed([sys.executable, "-c", MITSUBA_CHILD, here, str(size), str(spp), str(seed), out,
+                         str(emitter_samples)])
     return np.load(out), seconds
 
 
@@ -80,6 +88,9 @@ def main():
     parser.add_argument("--strata", default="target/release/strata")
     parser.add_argument("--repeats", type=int, default=3, help="timed runs of each; the least counts")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
+    parser.add_argument("--shading-samples", type=int, default=1, help="strata's paths per camera sample")
+    parser.add_argument("--emitter-samples", type=int, default=1, help="Mitsuba's emitter (and BSDF) samples per "
+                        "camera sample")
     args = parser.parse_args()
     rows = {"strata": {}, "mitsuba": {}}
     with tempfile.TemporaryDirectory() as tmp:
@@ -92,11 +103,12 @@ def main():
         m_ref, _ = mitsuba_image(args.size, REFERENCE_SPP, 1, os.path.join(tmp, "mref.npy"))
         for spp in args.spp:
             # Times are the least of three runs (this machine is shared); errors from the first.
-            s, ts = strata_image(args.strata, gltf, args.size, spp, 2, os.path.join(tmp, f"s{spp}.exr"))
-            m, tm = mitsuba_image(args.size, spp, 2, os.path.join(tmp, f"m{spp}.npy"))
+            k, e = args.shading_samples, args.emitter_samples
+            s, ts = strata_image(args.strata, gltf, args.size, spp, 2, os.path.join(tmp, f"s{spp}.exr"), k)
+            m, tm = mitsuba_image(args.size, spp, 2, os.path.join(tmp, f"m{spp}.npy"), e)
             for _ in range(args.repeats - 1):
-                ts = min(ts, strata_image(args.strata, gltf, args.size, spp, 2, os.path.join(tmp, "t.exr"))[1])
-                tm = min(tm, mitsuba_image(args.size, spp, 2, os.path.join(tmp, "t.npy"))[1])
+                ts = min(ts, strata_image(args.strata, gltf, args.size, spp, 2, os.path.join(tmp, "t.exr"), k)[1])
+                tm = min(tm, mitsuba_image(args.size, spp, 2, os.path.join(tmp, "t.npy"), e)[1])
             rows["strata"][spp] = (ts, relative_rmse(s, s_ref, spp))
             rows["mitsuba"][spp] = (tm, relative_rmse(m, m_ref, spp))
     spps = sorted(rows["strata"])
@@ -105,8 +117,10 @@ def main():
         b, a = np.polyfit(spps, ts, 1)
     else:
         a, b = 0.0, ts[0] / spps[0]
-    result = {"size": args.size, "runs": [], "strata_fit": {"startup_s": a, "per_spp_s": b}}
-    print(f"{args.size}x{args.size}, direct light; strata's time fitted: {a:.2f} s + {b * 1000:.1f} ms/spp")
+    result = {"size": args.size, "runs": [], "strata_fit": {"startup_s": a, "per_spp_s": b},
+              "shading_samples": args.shading_samples, "emitter_samples": args.emitter_samples}
+    print(f"{args.size}x{args.size}, direct light; strata --shading-samples {args.shading_samples}, Mitsuba "
+          f"emitter_samples {args.emitter_samples}; strata's time fitted: {a:.2f} s + {b * 1000:.1f} ms/spp")
     print("spp | strata s, rel. RMSE | mitsuba s, rel. RMSE | strata's time for mitsuba's error | ratio")
     for n in spps:
         (t_s, e_s), (t_m, e_m) = rows["strata"][n], rows["mitsuba"][n]

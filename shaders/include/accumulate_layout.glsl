@@ -61,8 +61,8 @@ layout(push_constant, std430) uniform AccumulatePush {
     uint direct_light;        // how direct light is estimated: DIRECT_MIS, DIRECT_LIGHT_SAMPLING, DIRECT_BSDF_SAMPLING
     uint alpha_moment;        // 1: alpha accumulates each sample's squared luminance instead of coverage
     uint sabotage;            // SABOTAGE_* bits: strata check's canaries break the render on purpose; 0 otherwise
-    uint pad_end0;  // to the Rust struct's 16-byte multiple
-    uint pad_end1;
+    uint shading_samples;  // paths traced from each camera sample's visible surface (1 or more)
+    uint pad_end1;  // to the Rust struct's 16-byte multiple
 } pc;
 
 #endif

@@ -88,7 +88,7 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     r.throughput *= weight;
     float survive = min(1.0, 4.0 * max(r.throughput.x, max(r.throughput.y, r.throughput.z)));
     if (survive < 1.0) {
-        float u = unit_float(pcg_hash(sampling_key(pc.seed, r.pixel, dim + VERTEX_ROULETTE) ^ pcg_hash(pc.sample_index)));
+        float u = unit_float(pcg_hash(sampling_key(pc.seed, r.pixel, dim + VERTEX_ROULETTE) ^ pcg_hash(path_index)));
         if (u >= survive) return false;
         r.throughput /= survive;
     }

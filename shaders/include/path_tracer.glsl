@@ -32,8 +32,8 @@ vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout
         vec3 o;
         vec3 d;
         vec2 t_range;
-        camera_ray(cameras[pc.counter_slot], p, sample2(r.pixel, DIM_PIXEL) - 0.5, sample2(r.pixel, DIM_LENS), o, d,
-                   t_range);
+        camera_ray(cameras[pc.counter_slot], p, camera_sample2(r.pixel, DIM_PIXEL) - 0.5,
+                   camera_sample2(r.pixel, DIM_LENS), o, d, t_range);
         log_ray(0u, o, t_range.x, d, t_range.y);
         Hit h = trace_closest(o, d, t_range.x, t_range.y, r.cone);
         if (h.record != MISS) {
@@ -56,18 +56,25 @@ vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout
             vec3 o;
             vec3 d;
             vec2 t_range;
-            camera_ray(cameras[pc.counter_slot], p, sample2(r.pixel, DIM_PIXEL) - 0.5, vec2(0.5), o, d, t_range);
+            camera_ray(cameras[pc.counter_slot], p, camera_sample2(r.pixel, DIM_PIXEL) - 0.5, vec2(0.5), o, d, t_range);
             value = vec4(background_seen(d), 0.0);
         }
     }
     return value;
 }
 
-// Adds a pixel's sample (its visible surface's light and its chain's) to its sum, in fixed point (the host
-// zeroes the sums before a frame's first sample, or loads them from a checkpoint or a partial render).
-void accumulate_sample(uvec2 pixel, vec4 value) {
-    // A sample that went wrong must not poison the pixel's whole estimate.
-    if (any(isnan(value)) || any(isinf(value))) value = vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0);
+// One path's value (its visible surface's light and its chain's) as the camera sample's mean takes it: a path
+// that went wrong must not poison the pixel's whole estimate.
+vec4 path_value(vec4 value) {
+    return any(isnan(value)) || any(isinf(value)) ? vec4(0.0, 0.0, 0.0, value.w == value.w ? value.w : 0.0) : value;
+}
+
+// Adds a pixel's camera sample (the sum of its paths' values, `paths` of them) to its sum, as their mean in fixed
+// point (the host zeroes the sums before a frame's first sample, or loads them from a checkpoint or a partial
+// render). One value per camera sample, whatever pc.shading_samples is: the sums, their bounds and the
+// resolve count camera samples.
+void accumulate_sample(uvec2 pixel, vec4 paths_sum, uint paths) {
+    vec4 value = paths == 1u ? paths_sum : paths_sum / float(paths);
     // For the tests' error estimates: the sample's squared luminance instead of its coverage.
     if (pc.alpha_moment != 0u) value.w = luminance(value.rgb) * luminance(value.rgb);
     uint i = pixel.y * pc.width + pixel.x;

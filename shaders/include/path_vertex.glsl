@@ -23,12 +23,30 @@ struct Surface {
     Shading m;
 };
 
+// Which of the frame's paths this invocation shades: camera sample pc.sample_index traces pc.shading_samples paths
+// from its visible surface, path k being number sample_index · shading_samples + k of sample_count ·
+// shading_samples. The path's own dimensions (lights, lobes, roulette) are stratified over all of them; the
+// camera's (pixel jitter, lens) over the camera samples, as the host draws them for the G-buffer. Set by
+// begin_path before each path.
+uint path_index = 0u;
+uint path_count = 1u;
+
+void begin_path(uint k) {
+    path_index = pc.sample_index * pc.shading_samples + k;
+    path_count = pc.sample_count * pc.shading_samples;
+}
+
 vec2 sample2(uint pixel, uint dim) {
-    return sample_2d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+    return sample_2d(pc.sampler_kind, pc.seed, pixel, path_index, path_count, dim);
 }
 
 float sample1(uint pixel, uint dim) {
-    return sample_1d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
+    return sample_1d(pc.sampler_kind, pc.seed, pixel, path_index, path_count, dim);
+}
+
+// The camera's dimensions (DIM_PIXEL, DIM_LENS): one point per camera sample, shared by its paths.
+vec2 camera_sample2(uint pixel, uint dim) {
+    return sample_2d(pc.sampler_kind, pc.seed, pixel, pc.sample_index, pc.sample_count, dim);
 }
 
 // A ray origin just off the surface on the side the ray leaves towards (scaled to the position's magnitude).

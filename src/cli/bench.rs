@@ -193,7 +193,7 @@ fn bench_scene_frames(
     paths: &[strata::render::accumulate::TracePath],
     auto: strata::render::accumulate::TracePath,
 ) -> Result<()> {
-    use strata::bench::time_frame;
+    use strata::bench::{time_frame, time_frame_with};
     use strata::render::accumulate::TracePath;
     use strata::scene::settings::Primary;
     let (w, h) = args.size;
@@ -217,11 +217,56 @@ fn bench_scene_frames(
         };
         by_path.push((*other, raster, rays));
     }
+    let paths = time_frame_with(gpu, &scene, &shading_samples_settings(args, auto), false)?;
     eprint!("\r\x1b[2K");
     println!("{}:", path.display());
     print_frame_figures(gpu, args.size, &f, &traced, probe);
     print_paths_side_by_side(&by_path);
+    print_shading_samples(args.spp, &f.stats, &paths.stats);
     Ok(())
+}
+
+/// Paths per camera sample in the shading-samples comparison: the same paths per pixel in a quarter of the
+/// camera samples.
+const BENCH_SHADING_SAMPLES: u32 = 4;
+
+/// The raster frame again with `BENCH_SHADING_SAMPLES` paths per camera sample and as many paths per pixel.
+fn shading_samples_settings(
+    args: &BenchArgs,
+    auto: strata::render::accumulate::TracePath,
+) -> strata::scene::settings::RenderSettings {
+    strata::scene::settings::RenderSettings {
+        width: args.size.0,
+        height: args.size.1,
+        spp: (args.spp / BENCH_SHADING_SAMPLES).max(1),
+        shading_samples: BENCH_SHADING_SAMPLES,
+        sampler: strata::scene::settings::SamplerKind::Jittered,
+        trace: auto.as_trace(),
+        ..Default::default()
+    }
+}
+
+/// One camera sample per path against `BENCH_SHADING_SAMPLES` paths per camera sample, the same paths per pixel.
+fn print_shading_samples(
+    spp: u32,
+    one: &strata::render::frame::FrameStats,
+    several: &strata::render::frame::FrameStats,
+) {
+    let (a, b) = (one.pass_times.unwrap_or_default(), several.pass_times.unwrap_or_default());
+    let share = |t: &strata::render::frame::PassTimes| 100.0 * (t.tlas_ms + t.gbuffer_ms) / t.total_ms();
+    println!(
+        "  --shading-samples {k}: {} x {k} paths in {:.0} GPU ms ({:.2} s wall), against {spp} x 1 in {:.0} ms \
+         ({:.2} s): {:.2}x; TLAS + G-buffer {:.1}% of the frame (target < 20%), {:.1}% with one path a sample",
+        several.samples,
+        b.total_ms(),
+        several.seconds,
+        a.total_ms(),
+        one.seconds,
+        a.total_ms() / b.total_ms(),
+        share(&b),
+        share(&a),
+        k = BENCH_SHADING_SAMPLES,
+    );
 }
 
 /// The raster frame's pass times, rays, probe ratios and memory, and the reference mode's beside it.

@@ -598,6 +598,7 @@ fn report(
         },
         indirect: settings.indirect && !args.preview,
         bounces: if args.preview { 0 } else { settings.bounces },
+        shading_samples: if args.preview { 1 } else { settings.shading_samples },
         seed: settings.seed,
         seconds,
         stats: match picture {

@@ -15,6 +15,8 @@ pub struct Summary {
     /// Diffuse interreflection was on.
     pub indirect: bool,
     pub bounces: u32,
+    /// Paths per camera sample (`--shading-samples`).
+    pub shading_samples: u32,
     pub seed: u64,
     pub seconds: f64,
     pub stats: Option<strata::render::frame::FrameStats>,
@@ -32,11 +34,15 @@ impl Summary {
         self.part.map_or(self.spp, |(a, b)| b - a)
     }
 
-    /// "16 spp", or for a part "samples 8..16 of 16 spp".
+    /// "16 spp", or for a part "samples 8..16 of 16 spp"; "× 4 paths" where each sample traced more than one.
     fn samples_text(&self) -> String {
-        match self.part {
+        let samples = match self.part {
             Some((a, b)) => format!("samples {a}..{b} of {} spp", self.spp),
             None => format!("{} spp", self.spp),
+        };
+        match self.shading_samples {
+            1 => samples,
+            k => format!("{samples} × {k} paths"),
         }
     }
 
@@ -84,6 +90,7 @@ impl Summary {
             "trace": self.trace,
             "indirect": self.indirect,
             "bounces": self.bounces,
+            "shading_samples": self.shading_samples,
             "seed": self.seed,
             "seconds": self.seconds,
             "render_seconds": render_seconds,

@@ -127,7 +127,10 @@ pub struct AccumulatePush {
     pub alpha_moment: u32,
     /// `SABOTAGE_*` bits (shared_constants.glsl): the deliberately broken renders of `strata check`'s canaries.
     pub sabotage: u32,
-    pub pad: [u32; 2],
+    /// Paths traced from each camera sample's visible surface (`RenderSettings::shading_samples`, at least 1):
+    /// the sums take their mean as the camera sample's value.
+    pub shading_samples: u32,
+    pub pad: u32,
 }
 
 /// `pc.direct_light`'s values (shared_constants.glsl): multiple importance sampling of lights and BSDF, or
@@ -182,6 +185,7 @@ mod tests {
         assert_eq!(offset_of!(AccumulatePush, indirect), 104);
         assert_eq!(offset_of!(AccumulatePush, direct_light), 108);
         assert_eq!(offset_of!(AccumulatePush, alpha_moment), 112);
+        assert_eq!(offset_of!(AccumulatePush, shading_samples), 120);
         assert_eq!(size_of::<ResolvePush>(), 32);
     }
 }

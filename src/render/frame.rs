@@ -313,7 +313,12 @@ pub fn render_samples(
         samples,
         width,
         height,
-        camera_rays: if traced { u64::from(width) * u64::from(height) * u64::from(samples) } else { 0 },
+        // The reference mode traces each path's camera ray (the same ray for a camera sample's paths).
+        camera_rays: if traced {
+            u64::from(width) * u64::from(height) * u64::from(samples) * u64::from(settings.shading_samples)
+        } else {
+            0
+        },
         shadow_rays,
         secondary_rays,
         seconds: started.elapsed().as_secs_f64(),
@@ -329,11 +334,11 @@ pub fn render_samples(
     Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
 }
 
-/// Room for every ray one sample's accumulation pass casts (`FrameOptions::log_rays`): per pixel at most one
-/// camera ray and, per path vertex, one shadow ray and one ray on; BSDF sampling alone casts one more ray past the
-/// last vertex.
+/// Room for every ray one sample's accumulation pass casts (`FrameOptions::log_rays`): per pixel and path at most
+/// one camera ray and, per path vertex, one shadow ray and one ray on; BSDF sampling alone casts one more ray past
+/// the last vertex.
 fn ray_log_for(device: &Arc<Device>, settings: &RenderSettings, max_depth: u32) -> Result<super::ray_log::RayLog> {
-    let rays_per_pixel = 2 * u64::from(max_depth) + 1;
+    let rays_per_pixel = (2 * u64::from(max_depth) + 1) * u64::from(settings.shading_samples);
     super::ray_log::RayLog::new(device, u64::from(settings.width) * u64::from(settings.height) * rays_per_pixel)
 }
 
@@ -372,6 +377,7 @@ fn frame_push_constants(settings: &RenderSettings, options: &FrameOptions, backd
         direct_light: options.direct_light.shader_value(),
         alpha_moment: u32::from(options.luminance_moments),
         sabotage: options.sabotage.bits(),
+        shading_samples: settings.shading_samples,
         ..bytemuck::Zeroable::zeroed()
     }
 }
@@ -386,6 +392,13 @@ fn sample_range(
     let (width, height, spp) = (settings.width, settings.height, settings.spp);
     if width == 0 || height == 0 || spp == 0 {
         bail!("nothing to render: {width}x{height} pixels, {spp} samples per pixel");
+    }
+    let paths = settings.shading_samples;
+    if !(1..=crate::scene::settings::MAX_SHADING_SAMPLES).contains(&paths) {
+        bail!(
+            "{paths} shading samples per camera sample: it takes 1 to {}",
+            crate::scene::settings::MAX_SHADING_SAMPLES
+        );
     }
     let (range_start, range_end) = options.samples.unwrap_or((0, spp));
     // An empty range is what a render resumed from a checkpoint that holds all of its samples has left.

@@ -7,7 +7,7 @@ use super::gltf_import::{load_gltf, LoadOptions};
 use super::gltf_uri::UriPolicy;
 use super::material::{BumpDerivative, BumpMap, NoiseKind};
 use super::settings::{Backdrop, Primary, SamplerKind, SettingsOverrides, ToneMap, Trace};
-use super::settings::{MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SPP};
+use super::settings::{MAX_BOUNCES, MAX_IMAGE_SIDE, MAX_SHADING_SAMPLES, MAX_SPP};
 use super::{Light, LightShape, NodeMotion, Projection, RigidMotion, Scene};
 use anyhow::{anyhow, bail, Result};
 use glam::{Vec2, Vec3};
@@ -115,6 +115,7 @@ struct RenderSection {
     primary: Option<S<String>>,
     indirect: Option<bool>,
     bounces: Option<S<u32>>,
+    shading_samples: Option<S<u32>>,
     trace: Option<S<String>>,
     output: Option<String>,
 }
@@ -691,6 +692,7 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         primary,
         indirect: r.indirect,
         bounces: source.count_in_range(&r.bounces, "bounces", 0, MAX_BOUNCES)?,
+        shading_samples: source.count_in_range(&r.shading_samples, "shading_samples", 1, MAX_SHADING_SAMPLES)?,
         trace,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })

@@ -144,6 +144,8 @@ pub const MAX_SPP: u32 = 65536;
 pub const MAX_EXPOSURE_STOPS: f32 = 64.0;
 /// Most bounces a path may take after the visible surface (each costs a ray and a shadow ray per pixel).
 pub const MAX_BOUNCES: u32 = 16;
+/// Most paths one camera sample may trace from its visible surface (`RenderSettings::shading_samples`).
+pub const MAX_SHADING_SAMPLES: u32 = 256;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct RenderSettings {
@@ -168,6 +170,11 @@ pub struct RenderSettings {
     /// Most bounces after the visible surface: gloss and translucency rays (and diffuse ones with `indirect`).
     /// 0 is direct light alone; the default 3 sees through a glass sphere (in, out, and what lies behind).
     pub bounces: u32,
+    /// Paths traced from each camera sample's visible surface, each with its own light, BSDF and bounce samples
+    /// (stratified over `spp × shading_samples`); the pixel jitter, lens point and shutter time stay one per
+    /// camera sample. 1 is Cook's distribution, every sample a G-buffer pass of its own; more pays where the noise
+    /// is in the lighting, not in edges, defocus or motion (docs/performance.md).
+    pub shading_samples: u32,
     /// How rays are traced (ray queries or a ray-tracing pipeline); the picture does not depend on it.
     pub trace: Trace,
     /// Default output path (the command line's `-o` wins).
@@ -190,6 +197,7 @@ impl Default for RenderSettings {
             primary: Primary::Raster,
             indirect: false,
             bounces: 3,
+            shading_samples: 1,
             trace: Trace::Auto,
             output: None,
         }
@@ -211,6 +219,7 @@ pub struct SettingsOverrides {
     pub primary: Option<Primary>,
     pub indirect: Option<bool>,
     pub bounces: Option<u32>,
+    pub shading_samples: Option<u32>,
     pub trace: Option<Trace>,
     pub output: Option<PathBuf>,
 }
@@ -236,6 +245,7 @@ impl RenderSettings {
         self.primary = o.primary.unwrap_or(self.primary);
         self.indirect = o.indirect.unwrap_or(self.indirect);
         self.bounces = o.bounces.unwrap_or(self.bounces);
+        self.shading_samples = o.shading_samples.unwrap_or(self.shading_samples);
         self.trace = o.trace.unwrap_or(self.trace);
         self.output = o.output.or(self.output);
         self
