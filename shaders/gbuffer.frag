@@ -6,6 +6,7 @@
 #extension GL_EXT_scalar_block_layout : require
 #include "gbuffer_layout.glsl"
 #include "material.glsl"
+#include "sampling.glsl"
 #define GBUFFER_ENCODE
 #include "gbuffer_encoding.glsl"
 
@@ -39,7 +40,14 @@ void main() {
     if (!(n_len > 0.0)) n = geometric;
 
     MaterialPoint p = evaluate_material(m, in_color, in_uv, in_uv1, n, in_dpdu, in_dpdv, vec2(0.0), true);
-    if (!alpha_test_passes(m, p.base.a)) discard;
+    // BLEND's coverage sample: independent per pixel, surface point and sample (the draw record's per-sample key;
+    // the point's position tells layers apart without gl_PrimitiveID, which a fragment shader may read only
+    // with geometry shaders enabled).
+    uint pixel = uint(gl_FragCoord.x) | (uint(gl_FragCoord.y) << 16u);
+    uvec3 at = floatBitsToUint(in_world_position);
+    uint h = pcg_hash(d.coverage_key ^ pcg_hash(pixel ^ pcg_hash(d.instance)));
+    float coverage_u = unit_float(pcg_hash(h ^ pcg_hash(at.x ^ pcg_hash(at.y ^ pcg_hash(at.z)))));
+    if (!alpha_test_passes(m, p.base.a, coverage_u)) discard;
     // Without a bump the normal (interpolated, or tilted by a normal texture) still needs its unit length.
     vec3 shading = m.bump.kind != BUMP_NONE ? p.normal : normalize(p.normal);
     // Double-sided faces seen from behind: the same surface, so its normals flip toward the viewer.

@@ -844,3 +844,79 @@ fn mirror_matches_direct_view(gpu: &GpuTest, detail: CeilingDetail) {
          steepest step {steepest}"
     );
 }
+
+/// glTF BLEND is stochastic coverage (material.glsl's alpha_test_passes): an unlit quad of alpha 0.3 over a black
+/// background shows 0.3 × its colour and covers 0.3 of each pixel on average, in both primary modes; a BLEND veil
+/// of alpha 0.3 passes 0.7 of a directional light to the floor in its shadow. Tolerances: 5 standard errors of
+/// the Bernoulli coverage over the pixels and samples, σ = sqrt(a(1 − a) / (P·N)) of the full value.
+#[test]
+fn blend_is_stochastic_coverage_that_averages_to_the_blend() {
+    use strata::scene::{AlphaMode, Material};
+    let gpu = GpuTest::new();
+    let a = 0.3f32;
+    let colour = Vec3::new(0.8, 0.4, 0.2);
+    let (size, spp) = (16u32, 64u32);
+    let sigma = |full: f32| full * (a * (1.0 - a) / (size * size * spp) as f32).sqrt();
+    let blend = |name: &str, rgb: Vec3, unlit: bool| Material {
+        name: name.into(),
+        base_color: rgb.extend(a),
+        alpha_mode: AlphaMode::Blend,
+        unlit,
+        ..Default::default()
+    };
+    let frame_settings =
+        |primary| RenderSettings { primary, ..optics::settings(size, size, spp, SamplerKind::MultiJittered) };
+    let mean = |frame: &RenderedFrame, channel: usize| {
+        frame.linear.pixels.iter().map(|p| p[channel]).sum::<f32>() / frame.linear.pixels.len() as f32
+    };
+
+    let mut glaze = Scene::default();
+    glaze.materials.push(blend("glaze", colour, true));
+    let (p, m) = plane_at(Vec2::splat(4.0), Vec3::ZERO, false, 0);
+    place(&mut glaze, "glaze", p, m);
+    glaze.camera = Some(optics::ortho_down(Vec3::ZERO, 1.0, 0.5));
+    for primary in [Primary::Raster, Primary::Rays] {
+        let frame = render(gpu.device(), &glaze, &frame_settings(primary));
+        let (red, blue, coverage) = (mean(&frame, 0), mean(&frame, 2), mean(&frame, 3));
+        eprintln!(
+            "{primary:?}: red {red:.4} (expected {:.4} ± {:.4}), coverage {coverage:.4}",
+            a * colour.x,
+            sigma(colour.x)
+        );
+        assert!((red - a * colour.x).abs() < 5.0 * sigma(colour.x), "{primary:?}: red {red}, not {}", a * colour.x);
+        assert!((blue - a * colour.z).abs() < 5.0 * sigma(colour.z), "{primary:?}: blue {blue}, not {}", a * colour.z);
+        assert!((coverage - a).abs() < 5.0 * sigma(1.0), "{primary:?}: coverage {coverage}, not {a}");
+    }
+
+    // A floor under a sun travelling down and towards +x at 45°: a 1 m veil 1 m up over the origin shadows
+    // x in [0.5, 1.5]; the camera, 0.5 m up, sees x in [0.7, 1.3] and not the veil.
+    let floor = |veil: bool| {
+        let mut scene = Scene::default();
+        let ground = lambertian(&mut scene, 0.5);
+        let (p, m) = plane_at(Vec2::splat(8.0), Vec3::ZERO, false, ground);
+        place(&mut scene, "floor", p, m);
+        if veil {
+            scene.materials.push(blend("veil", Vec3::splat(0.5), false));
+            let (p, m) = plane_at(Vec2::ONE, Vec3::Y, false, scene.materials.len() - 1);
+            place(&mut scene, "veil", p, m);
+        }
+        let travel = Vec3::new(1.0, -1.0, 0.0).normalize();
+        scene.lights.push(Light {
+            name: "sun".into(),
+            shape: LightShape::Directional,
+            emission: Vec3::splat(2.0),
+            world_from_light: look_at(Vec3::Y, Vec3::Y + travel, Vec3::Y),
+            node: None,
+            range: 0.0,
+        });
+        scene.camera = Some(optics::ortho_down(Vec3::X, 0.5, 0.3));
+        scene
+    };
+    let lit = mean(&render(gpu.device(), &floor(false), &frame_settings(Primary::Raster)), 0);
+    let shadowed = mean(&render(gpu.device(), &floor(true), &frame_settings(Primary::Raster)), 0);
+    let passed = shadowed / lit;
+    eprintln!("the veil passes {passed:.4} of the sun (expected {:.4} ± {:.4})", 1.0 - a, sigma(1.0));
+    assert!(lit > 0.05, "the floor is lit: {lit}");
+    assert!((passed - (1.0 - a)).abs() < 5.0 * sigma(1.0), "the veil passes {passed} of the sun, not {}", 1.0 - a);
+    gpu.finish().unwrap();
+}

@@ -12,7 +12,7 @@ struct GBufferDraw {
     vec4 normal_rows[3];
     uint material;
     uint instance;
-    uint pad0;
+    uint coverage_key;  // this sample's key for BLEND's stochastic coverage (alpha_test_passes)
     uint pad1;
 };
 

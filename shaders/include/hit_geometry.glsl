@@ -4,6 +4,7 @@
 #ifndef HIT_GEOMETRY_GLSL
 #define HIT_GEOMETRY_GLSL
 #include "material.glsl"
+#include "sampling.glsl"
 // A triangle a ray met: its primitive record, vertex indices and barycentric weights.
 struct TriangleHit {
     GpuPrimitiveRecord r;
@@ -82,22 +83,32 @@ vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
 
 // Whether an alpha-tested material covers a point with this vertex colour alpha and these UVs: base colour ×
 // vertex colour × texture alpha under the one alpha test (alpha_test_passes, as gbuffer.frag discards), the
-// texture read at level of detail `lod`.
-bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1, float lod) {
+// texture read at level of detail `lod`; `u`, BLEND's coverage sample.
+bool material_covers(GpuMaterial m, float vertex_alpha, vec2 uv0, vec2 uv1, float lod, float u) {
     float alpha = m.base_color.a * vertex_alpha;
     if (m.base_color_texture >= 0) {
         alpha *= textureLod(textures[nonuniformEXT(m.base_color_texture)], texture_uv(m.base_color_uv_rows, uv0, uv1), lod).a;
     }
-    return alpha_test_passes(m, alpha);
+    return alpha_test_passes(m, alpha, u);
+}
+
+// BLEND's coverage sample for a ray's candidate hit: a hash of the sample, the triangle and where along which ray
+// it lies (origins too: an orthographic camera's rays share one direction), so that paths, rays and surfaces draw
+// independently, and both ways to trace draw alike.
+float ray_coverage_sample(int record, uint primitive, vec3 origin, vec3 dir, float t) {
+    uint h = pcg_hash(pc.seed ^ pcg_hash(pc.sample_index ^ pcg_hash(uint(record) ^ pcg_hash(primitive))));
+    h = pcg_hash(h ^ floatBitsToUint(dir.x)) ^ pcg_hash(floatBitsToUint(dir.y) ^ pcg_hash(floatBitsToUint(dir.z)));
+    h = pcg_hash(h ^ floatBitsToUint(origin.x)) ^ pcg_hash(floatBitsToUint(origin.y) ^ pcg_hash(floatBitsToUint(origin.z)));
+    return unit_float(pcg_hash(h ^ floatBitsToUint(t)));
 }
 
 // Whether a candidate triangle of alpha-tested geometry covers its point, its texture read through the ray's cone
 // (width at the origin, spread) as hit_surface reads textures, so a minified cut-out is as covered as the raster
 // pass's mip-filtered view of it. Shadow rays carry no pixel footprint: a zero cone reads level 0. The one alpha
 // test of both ways to trace: the ray-query loop (trace_query.glsl) and the any-hit shader (accumulate.rahit)
-// pass the candidate's record, triangle, barycentrics, distance, transform and the ray's direction.
-bool alpha_covers(int record, uint primitive, vec2 barycentrics, float t, mat4x3 world_from_object, vec3 dir,
-                  vec2 cone) {
+// pass the candidate's record, triangle, barycentrics, distance, transform and the ray's origin and direction.
+bool alpha_covers(int record, uint primitive, vec2 barycentrics, float t, mat4x3 world_from_object, vec3 origin,
+                  vec3 dir, vec2 cone) {
     TriangleHit h = triangle_hit(record, primitive, barycentrics);
     GpuMaterial m = materials[h.r.material];
     vec3 uv_area = hit_uv_and_area(reads_uv1(m.base_color_uv_rows) ? h.r.uvs1 : h.r.uvs, h);
@@ -111,6 +122,6 @@ bool alpha_covers(int record, uint primitive, vec2 barycentrics, float t, mat4x3
         float footprint = footprint_lod(width, world_edges, dir, uv_area.z);
         lod = texture_lod(m.base_color_uv_rows, vec2(footprint));
     }
-    return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod);
+    return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod, ray_coverage_sample(record, primitive, origin, dir, t));
 }
 #endif

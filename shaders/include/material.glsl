@@ -13,11 +13,13 @@
 
 vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod);
 
-// The alpha test of glTF's alpha modes: MASK keeps what reaches the cutoff; BLEND is drawn as coverage at 0.5
-// (no order-independent transparency). Opaque materials pass.
-bool alpha_test_passes(GpuMaterial m, float alpha) {
+// The alpha test of glTF's alpha modes: MASK keeps what reaches the cutoff; BLEND keeps a point with probability
+// alpha (stochastic transparency, Enderton et al. 2010), `u` uniform in [0, 1) and independent between pixels,
+// samples and surfaces, so that the mean over samples is the blend: alpha × this surface + (1 − alpha) × what lies
+// behind, for the raster pass, every ray and the shadows alike. Opaque materials pass.
+bool alpha_test_passes(GpuMaterial m, float alpha, float u) {
     if (m.alpha_mode == ALPHA_OPAQUE) return true;
-    return alpha >= (m.alpha_mode == ALPHA_MASK ? m.alpha_cutoff : 0.5);
+    return m.alpha_mode == ALPHA_MASK ? alpha >= m.alpha_cutoff : alpha > u;
 }
 
 // A material at one surface point.

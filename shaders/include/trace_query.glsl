@@ -12,7 +12,8 @@ void run_query(rayQueryEXT q, vec2 cone) {
                              rayQueryGetIntersectionGeometryIndexEXT(q, false),
                          uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)),
                          rayQueryGetIntersectionBarycentricsEXT(q, false), rayQueryGetIntersectionTEXT(q, false),
-                         rayQueryGetIntersectionObjectToWorldEXT(q, false), rayQueryGetWorldRayDirectionEXT(q), cone)) {
+                         rayQueryGetIntersectionObjectToWorldEXT(q, false), rayQueryGetWorldRayOriginEXT(q),
+                         rayQueryGetWorldRayDirectionEXT(q), cone)) {
             rayQueryConfirmIntersectionEXT(q);
         }
     }

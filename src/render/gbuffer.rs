@@ -96,7 +96,8 @@ pub struct GBufferInputs<'m> {
 impl GBufferInputs<'_> {
     /// Fills `slot` with the draws at instance transforms `transforms` (one per scene instance). The GPU must
     /// not be reading that slot.
-    pub fn write_slot(&mut self, slot: u32, transforms: &[Mat4]) -> Result<()> {
+    /// Writes the draws of `slot`: each instance at its transform, with the sample's BLEND coverage key.
+    pub fn write_slot(&mut self, slot: u32, transforms: &[Mat4], coverage_key: u32) -> Result<()> {
         if slot >= self.slots {
             bail!("gbuffer draws: slot {slot} of {}", self.slots);
         }
@@ -105,7 +106,7 @@ impl GBufferInputs<'_> {
             .iter()
             .map(|&(instance, material)| {
                 let transform = transforms.get(instance).copied().unwrap_or(Mat4::ZERO);
-                GBufferDraw::new(transform, material, instance as u32)
+                GBufferDraw::new(transform, material, instance as u32, coverage_key)
             })
             .collect();
         let offset = u64::from(slot) * (self.order.len() * std::mem::size_of::<GBufferDraw>()) as u64;
@@ -195,7 +196,7 @@ impl GBufferPass {
             bail!("{} transforms for {} instances", transforms.len(), scene.instances.len());
         }
         let mut inputs = self.inputs_for_slots(scene, gpu_scene, textures, materials, 1)?;
-        inputs.write_slot(0, transforms)?;
+        inputs.write_slot(0, transforms, 0)?;
         Ok(inputs)
     }
 

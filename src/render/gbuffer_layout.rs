@@ -72,11 +72,15 @@ pub struct GBufferDraw {
     pub normal_rows: [Vec4; 3],
     pub material: u32,
     pub instance: u32,
-    pub pad: [u32; 2],
+    /// The sample's key for BLEND's stochastic coverage.
+    pub coverage_key: u32,
+    pub pad: u32,
 }
 
 impl GBufferDraw {
-    pub fn new(world_from_object: Mat4, material: u32, instance: u32) -> Self {
+    /// `coverage_key`: the sample's key for BLEND's stochastic coverage (the fragment shader hashes it with the
+    /// pixel and triangle).
+    pub fn new(world_from_object: Mat4, material: u32, instance: u32, coverage_key: u32) -> Self {
         let normal = Mat3::from_mat4(world_from_object).inverse().transpose();
         let normal = if normal.is_finite() { normal } else { Mat3::ZERO };
         Self {
@@ -84,7 +88,8 @@ impl GBufferDraw {
             normal_rows: [0, 1, 2].map(|r| normal.row(r).extend(0.0)),
             material,
             instance,
-            pad: [0; 2],
+            coverage_key,
+            pad: 0,
         }
     }
 }
@@ -197,7 +202,8 @@ impl GpuMaterial {
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (c::ALPHA_OPAQUE, 0.0),
             AlphaMode::Mask { cutoff } => (c::ALPHA_MASK, cutoff),
-            AlphaMode::Blend => (c::ALPHA_BLEND, 0.5),
+            // The cutoff is unused: BLEND's test draws its own (alpha_test_passes).
+            AlphaMode::Blend => (c::ALPHA_BLEND, 0.0),
         };
         Self {
             base_color: m.base_color,

@@ -26,7 +26,8 @@ impl RayScene {
     pub fn build(device: &Arc<Device>, scene: &Scene, geometry: &GpuScene, default_material: u32) -> Result<Self> {
         let mut blases = Vec::with_capacity(geometry.meshes.len());
         let mut records = Vec::new();
-        // As the raster pass sees them: MASK cuts out below its cutoff, BLEND below 0.5 (gbuffer.frag).
+        // As the raster pass sees them: MASK cuts out below its cutoff, BLEND keeps alpha of the samples
+        // (material.glsl's alpha_test_passes).
         let opaque = |material: Option<usize>| {
             material.and_then(|m| scene.materials.get(m)).is_none_or(|m| m.alpha_mode == AlphaMode::Opaque)
         };

@@ -45,6 +45,12 @@ pub fn camera_sample_at(
     (t, sample, camera)
 }
 
+/// The key the G-buffer pass hashes with each pixel and triangle for BLEND's stochastic coverage in sample `index`
+/// (gbuffer.frag): every sample draws its own.
+pub fn coverage_key(seed: u32, index: u32) -> u32 {
+    seed ^ index.wrapping_mul(0x9e37_79b9)
+}
+
 /// The camera the reference mode's primary rays start from (`camera_ray` in accumulate.comp).
 pub fn gpu_camera(camera: &crate::scene::Camera, width: u32, height: u32) -> GpuCamera {
     let m = camera.world_from_camera;
@@ -147,7 +153,7 @@ impl<'a> SampleSlots<'a> {
         let light_count = set.lights.len().min(self.light_capacity);
         let light_bytes = (self.light_capacity * std::mem::size_of::<GpuLight>()) as u64;
         self.lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
-        self.draws.write_slot(slot, &transforms)?;
+        self.draws.write_slot(slot, &transforms, coverage_key(frame.seed, index))?;
         let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
         self.cameras.write(u64::from(slot) * camera_bytes, bytemuck::bytes_of(&gpu_camera(&camera, width, height)))?;
         let orthographic = matches!(camera.projection, Projection::Orthographic { .. });

@@ -107,8 +107,8 @@ pub enum AlphaMode {
     Mask {
         cutoff: f32,
     },
-    /// strata has no order-independent transparency: BLEND renders as coverage-weighted MASK at 0.5 in the
-    /// raster pass, and as translucency through `transmission` in the ray-traced one.
+    /// Alpha as coverage: each sample keeps a point with probability alpha (stochastic transparency, the same
+    /// test in the raster pass and for every ray), so the samples' mean is glTF's blend over what lies behind.
     Blend,
 }
 
