@@ -14,7 +14,7 @@ pub mod shaders;
 pub mod vk;
 pub mod write_plan;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use std::path::Path;
 
 /// A scene ready to render, with the settings its file asked for.
@@ -26,10 +26,12 @@ pub struct LoadedScene {
 }
 
 /// How to load a scene.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct LoadOptions {
     /// Allow glTF URIs outside the file's directory (absolute paths, `..`); `None`: what the scene file says.
     pub allow_any_uri: Option<bool>,
+    /// The animation clip that plays; `None`: what the scene file says, else the first (as viewers do).
+    pub animation: Option<scene::animation::AnimationChoice>,
 }
 
 /// Loads a `.gltf` / `.glb` file, or a scene file (`.toml`) and the glTF it names.
@@ -38,19 +40,25 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene> {
     let policy =
         options.allow_any_uri.map(|any| if any { UriPolicy::AnyLocalPath } else { UriPolicy::InsideDirectory });
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
+    let (mut loaded, file_clip) = match ext.as_deref() {
         Some("gltf") | Some("glb") => {
             let options = scene::gltf_import::LoadOptions { uri_policy: policy.unwrap_or_default() };
             let scene = scene::gltf_import::load_gltf(path, &options)?;
-            Ok(LoadedScene { scene, settings: Default::default() })
+            (LoadedScene { scene, settings: Default::default() }, None)
         }
         Some("toml") => {
             let file = scene::scene_file::load_scene_file(path, policy)?;
-            Ok(LoadedScene { scene: file.scene, settings: file.settings })
+            (LoadedScene { scene: file.scene, settings: file.settings }, file.animation)
         }
         Some(other) => bail!("{}: unknown scene extension \".{other}\" (use .gltf, .glb or .toml)", path.display()),
         None => bail!("{}: scene file has no extension (use .gltf, .glb or .toml)", path.display()),
-    }
+    };
+    // One clip plays: the command line's, else the scene file's, else the first.
+    let choice = options.animation.as_ref().or(file_clip.as_ref());
+    let note = scene::animation::select_clip(&mut loaded.scene.animations, choice)
+        .with_context(|| format!("{}: choosing the animation clip", path.display()))?;
+    loaded.scene.notes.extend(note);
+    Ok(loaded)
 }
 
 /// Loads a scene with default options and without its settings.
@@ -126,6 +134,7 @@ pub fn part_provenance(
     let scene::Scene {
         source: _,
         warnings: _,
+        notes: _,
         meshes,
         materials,
         textures,

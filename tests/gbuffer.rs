@@ -25,7 +25,13 @@ fn scene_of(primitive: Primitive, world_from_object: Mat4, bump: Option<BumpMap>
     Scene {
         meshes: vec![Mesh { name: "subject".into(), primitives: vec![primitive] }],
         materials: vec![Material { name: "bumpy".into(), bump, ..Default::default() }],
-        instances: vec![Instance { name: "subject".into(), mesh: 0, node: None, world_from_object }],
+        instances: vec![Instance {
+            name: "subject".into(),
+            mesh: 0,
+            node: None,
+            world_from_object,
+            node_from_object: glam::Mat4::IDENTITY,
+        }],
         camera: Some(camera),
         ..Default::default()
     }

@@ -314,3 +314,243 @@ fn unlit_materials_are_read_and_written() {
     let back = strata::load_scene(&exported).unwrap();
     assert!(back.materials[0].unlit && !back.materials[1].unlit, "the exporter writes KHR_materials_unlit");
 }
+
+/// Vertex data and the accessors over it, each attribute in its own strided view (elements on 4-byte
+/// boundaries, as glTF 2.0 §3.6.2.4 and KHR_mesh_quantization ask).
+#[derive(Default)]
+struct VertexData {
+    bytes: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+/// One quantized component type: glTF's code, its bytes, and how a component is written.
+#[derive(Clone, Copy)]
+struct Quantized {
+    code: u32,
+    size: usize,
+    normalized: bool,
+}
+
+const I8_NORM: Quantized = Quantized { code: 5120, size: 1, normalized: true };
+const I8: Quantized = Quantized { code: 5120, size: 1, normalized: false };
+const U8: Quantized = Quantized { code: 5121, size: 1, normalized: false };
+const I16_NORM: Quantized = Quantized { code: 5122, size: 2, normalized: true };
+const U16_NORM: Quantized = Quantized { code: 5123, size: 2, normalized: true };
+const U16: Quantized = Quantized { code: 5123, size: 2, normalized: false };
+
+impl Quantized {
+    /// The float glTF's table makes of component `c` (glTF 2.0 §3.11; KHR_mesh_quantization).
+    fn float(self, c: i32) -> f32 {
+        let max = match (self.code, self.size) {
+            (5120, _) => 127.0,
+            (5121, _) => 255.0,
+            (5122, _) => 32767.0,
+            _ => 65535.0,
+        };
+        if self.normalized {
+            (c as f32 / max).max(-1.0)
+        } else {
+            c as f32
+        }
+    }
+}
+
+impl VertexData {
+    /// Adds an accessor of `kind` ("VEC2" ...) over `elements`: as `q`'s integers, or (`q` None) as floats.
+    fn add(&mut self, kind: &str, elements: &[Vec<i32>], q: Option<Quantized>, as_float: Quantized) -> usize {
+        let size = q.map_or(4, |q| q.size);
+        let stride = (elements[0].len() * size).next_multiple_of(4);
+        let offset = self.bytes.len();
+        for e in elements {
+            let mut bytes: Vec<u8> = match q {
+                Some(q) if q.size == 1 => e.iter().map(|&c| c as u8).collect(),
+                Some(_) => e.iter().flat_map(|&c| (c as u16).to_le_bytes()).collect(),
+                None => e.iter().flat_map(|&c| as_float.float(c).to_le_bytes()).collect(),
+            };
+            bytes.resize(stride, 0);
+            self.bytes.extend(bytes);
+        }
+        self.views.push(
+            json!({"buffer": 0, "byteOffset": offset, "byteLength": stride * elements.len(), "byteStride": stride}),
+        );
+        let mut accessor = json!({"bufferView": self.views.len() - 1, "componentType": q.map_or(5126, |q| q.code),
+                                  "count": elements.len(), "type": kind});
+        if q.is_some_and(|q| q.normalized) {
+            accessor["normalized"] = json!(true);
+        }
+        // glTF asks POSITION accessors for bounds; others may have them.
+        if kind == "VEC3" {
+            let bound = |f: fn(i32, i32) -> i32| {
+                (0..3).map(|i| elements.iter().map(|e| e[i]).reduce(f).unwrap()).collect::<Vec<_>>()
+            };
+            let (lo, hi) = (bound(i32::min), bound(i32::max));
+            let float = |v: Vec<i32>| v.into_iter().map(|c| json!(as_float.float(c))).collect::<Vec<_>>();
+            (accessor["min"], accessor["max"]) = match q {
+                Some(_) => (json!(lo), json!(hi)),
+                None => (json!(float(lo)), json!(float(hi))),
+            };
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+}
+
+/// A triangle whose every attribute (and morph target) is quantized with `quantize` set, else the same values
+/// as the floats glTF's tables make of them: its float twin.
+fn quantized_triangle(quantize: bool) -> (Value, Vec<u8>) {
+    let mut data = VertexData::default();
+    let mut add =
+        |kind: &str, elements: Vec<Vec<i32>>, q: Quantized| data.add(kind, &elements, quantize.then_some(q), q);
+    let position = add("VEC3", vec![vec![0, 0, 0], vec![32767, 0, -32767], vec![0, 16384, 1000]], I16_NORM);
+    let normal = add("VEC3", vec![vec![0, 0, 127], vec![0, 90, 90], vec![-127, 0, 1]], I8_NORM);
+    let tangent =
+        add("VEC4", vec![vec![32767, 0, 0, 32767], vec![0, 32767, 0, -32767], vec![23170, 23170, 0, 32767]], I16_NORM);
+    let uv0 = add("VEC2", vec![vec![0, 0], vec![65535, 0], vec![0, 30000]], U16_NORM);
+    let uv1 = add("VEC2", vec![vec![0, 0], vec![3, 0], vec![0, 200]], U8);
+    let displacement = add("VEC3", vec![vec![0, 0, 0], vec![-3, 2, 0], vec![0, 0, 7]], I8);
+    let normal_shift = add("VEC3", vec![vec![64, 0, 0], vec![0, 0, 0], vec![0, -32767, 0]], I16_NORM);
+    // A second primitive: unnormalized 16-bit positions, 8-bit normalized signed texture coordinates.
+    let position2 = add("VEC3", vec![vec![0, 0, 0], vec![4000, 0, 0], vec![0, 65535, 2]], U16);
+    let uv2 = add("VEC2", vec![vec![-127, 0], vec![127, 64], vec![0, -128]], I8_NORM);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": if quantize { json!(["KHR_mesh_quantization"]) } else { json!([]) },
+        "extensionsRequired": if quantize { json!(["KHR_mesh_quantization"]) } else { json!([]) },
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "scale": [0.001, 0.001, 0.001]}],
+        "meshes": [{"weights": [0.5], "primitives": [
+            {"attributes": {"POSITION": position, "NORMAL": normal, "TANGENT": tangent, "TEXCOORD_0": uv0,
+                            "TEXCOORD_1": uv1},
+             "targets": [{"POSITION": displacement, "NORMAL": normal_shift}]},
+            {"attributes": {"POSITION": position2, "TEXCOORD_0": uv2}}
+        ]}],
+        "buffers": [{"byteLength": data.bytes.len()}],
+        "bufferViews": data.views,
+        "accessors": data.accessors
+    });
+    (doc, data.bytes)
+}
+
+/// KHR_mesh_quantization: a triangle whose positions, normals, tangents, both UV sets and morph targets are 8- and
+/// 16-bit integers, normalized and not, loads to the very vertices of its float twin; without the extension
+/// declared, the same file is refused with the extension named.
+#[test]
+fn a_quantized_mesh_loads_as_its_float_twin() {
+    let dir = temp_dir("quantized");
+    let load = |name: &str, (doc, bin): (Value, Vec<u8>)| {
+        let path = dir.join(name);
+        std::fs::write(&path, glb(&doc, &bin)).unwrap();
+        strata::load_scene(&path)
+    };
+    let quantized = load("quantized.glb", quantized_triangle(true)).expect("the quantized file loads");
+    let twin = load("twin.glb", quantized_triangle(false)).expect("its float twin loads");
+    assert!(quantized.warnings.is_empty(), "{:?}", quantized.warnings);
+    for (q, f) in quantized.meshes[0].primitives.iter().zip(&twin.meshes[0].primitives) {
+        assert_eq!(q.positions, f.positions);
+        assert_eq!(q.normals, f.normals);
+        assert_eq!(q.tangents, f.tangents);
+        assert_eq!((&q.uvs, &q.uvs1), (&f.uvs, &f.uvs1));
+    }
+    // The morph target applied at weight 0.5, the conversion as glTF's table says.
+    let p = &quantized.meshes[0].primitives[0];
+    assert_eq!(p.positions[1], Vec3::new(1.0 - 1.5, 1.0, -1.0));
+    assert_eq!(p.uvs1[2], Vec2::new(0.0, 200.0));
+    assert_eq!(quantized.meshes[0].primitives[1].uvs[2], Vec2::new(0.0, -1.0), "-128/127 clamps to -1");
+    assert_eq!(quantized.meshes[0].primitives.len(), 2);
+
+    let (mut doc, bin) = quantized_triangle(true);
+    doc["extensionsUsed"] = json!([]);
+    doc["extensionsRequired"] = json!([]);
+    let error = format!("{:#}", load("undeclared.glb", (doc, bin)).unwrap_err());
+    assert!(error.contains("POSITION") && error.contains("KHR_mesh_quantization"), "{error}");
+}
+
+/// A triangle drawn by a node with EXT_mesh_gpu_instancing: `copies` (translation, rotation, scale); with
+/// `instanced` false, the twin that places the same copies as child nodes of the same parent.
+fn instanced_triangles(instanced: bool, copies: &[(Vec3, glam::Quat, Vec3)]) -> (Value, Vec<u8>) {
+    let mut bin = bytes_f32(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    let translations: Vec<f32> = copies.iter().flat_map(|c| c.0.to_array()).collect();
+    bin.extend(bytes_f32(&translations));
+    // Rotations as normalized 16-bit integers, as the extension allows.
+    for c in copies {
+        bin.extend(c.1.to_array().iter().flat_map(|&v| ((v * 32767.0).round() as i16).to_le_bytes()));
+    }
+    let scales: Vec<f32> = copies.iter().flat_map(|c| c.2.to_array()).collect();
+    bin.extend(bytes_f32(&scales));
+    let n = copies.len();
+    let parent = json!({"translation": [0, 0, -5], "rotation": [0, 0.38268343, 0, 0.9238795]});
+    let nodes = if instanced {
+        let mut node = parent.clone();
+        node["mesh"] = json!(0);
+        node["extensions"] =
+            json!({"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 1, "ROTATION": 2, "SCALE": 3}}});
+        vec![node]
+    } else {
+        let mut node = parent.clone();
+        node["children"] = json!((1..=n).collect::<Vec<_>>());
+        let mut nodes = vec![node];
+        for c in copies {
+            // The twin's rotation is the one the 16-bit accessor holds, normalized as strata normalizes it.
+            let q = c.1.to_array().map(|v| ((v * 32767.0).round() as i16) as f32 / 32767.0);
+            let q = glam::Quat::from_array(q).normalize().to_array();
+            nodes.push(json!({"mesh": 0, "translation": c.0.to_array(), "rotation": q, "scale": c.2.to_array()}));
+        }
+        nodes
+    };
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": if instanced { json!(["EXT_mesh_gpu_instancing"]) } else { json!([]) },
+        "scenes": [{"nodes": [0]}],
+        "nodes": nodes,
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 12 * n},
+            {"buffer": 0, "byteOffset": 36 + 12 * n, "byteLength": 8 * n},
+            {"buffer": 0, "byteOffset": 36 + 20 * n, "byteLength": 12 * n}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": n, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5122, "normalized": true, "count": n, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5126, "count": n, "type": "VEC3"}
+        ]
+    });
+    (doc, bin)
+}
+
+/// EXT_mesh_gpu_instancing: a node drawing three copies of a triangle (16-bit rotations) makes three instances
+/// placed exactly where the twin file's three child nodes put them; copies whose attributes disagree in count
+/// are an error naming the node and the attribute.
+#[test]
+fn gpu_instancing_places_each_copy_like_a_child_node() {
+    use glam::Quat;
+    let copies = [
+        (Vec3::new(1.0, 0.0, 0.0), Quat::IDENTITY, Vec3::ONE),
+        (Vec3::new(0.0, 2.0, 0.0), Quat::from_rotation_z(0.7), Vec3::new(2.0, 1.0, 1.0)),
+        (Vec3::new(-1.0, 0.0, 3.0), Quat::from_rotation_x(-1.2), Vec3::splat(0.5)),
+    ];
+    let dir = temp_dir("instancing");
+    let load = |name: &str, (doc, bin): (Value, Vec<u8>)| {
+        let path = dir.join(name);
+        std::fs::write(&path, glb(&doc, &bin)).unwrap();
+        strata::load_scene(&path)
+    };
+    let instanced = load("instanced.glb", instanced_triangles(true, &copies)).expect("the instanced file loads");
+    let twin = load("twin.glb", instanced_triangles(false, &copies)).expect("its twin loads");
+    assert!(instanced.warnings.is_empty(), "{:?}", instanced.warnings);
+    assert_eq!(instanced.instances.len(), 3);
+    let (a, b) = (instanced.instance_transforms_at(0.0), twin.instance_transforms_at(0.0));
+    for (k, (a, b)) in a.iter().zip(&b).enumerate() {
+        assert!(a.abs_diff_eq(*b, 1e-5), "copy {k}: {a} against the child node's {b}");
+        assert!(a.abs_diff_eq(instanced.instances[k].world_from_object, 1e-6), "copy {k} at rest");
+    }
+    assert!(!a[0].abs_diff_eq(a[1], 1e-3), "the copies are placed apart");
+
+    let (mut doc, bin) = instanced_triangles(true, &copies);
+    doc["accessors"][3]["count"] = json!(2);
+    let error = format!("{:#}", load("uneven.glb", (doc, bin)).unwrap_err());
+    assert!(error.contains("EXT_mesh_gpu_instancing") && error.contains("SCALE has 2 elements"), "{error}");
+}

@@ -247,6 +247,10 @@ pub struct RenderArgs {
     /// Frames per second of --frames and --time, 0.001 to 1000.
     #[arg(long, value_name = "F", default_value_t = 24.0, value_parser = parse_fps)]
     pub fps: f32,
+    /// Which animation clip plays, by name or index (`strata info FILE` lists them); one clip plays at a time, the
+    /// first unless this or the scene file's `animation` names another.
+    #[arg(long, value_name = "NAME|INDEX", value_parser = parse_animation)]
+    pub animation: Option<strata::scene::animation::AnimationChoice>,
     /// Render one frame at time T seconds of the animation (its shutter as --shutter-angle says): the same picture
     /// as the frame of --frames at that time.
     #[arg(long, value_name = "T", value_parser = parse_time, allow_hyphen_values = true)]
@@ -339,9 +343,20 @@ impl RenderArgs {
 
 #[derive(Args)]
 pub struct InfoArgs {
+    /// A scene (.gltf, .glb or .toml) to describe instead of the devices: its meshes, materials, cameras, lights
+    /// and animation clips (the names and indices --animation takes).
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<std::path::PathBuf>,
     /// Also print the devices' validation messages (creates an instance with the layer when installed).
     #[arg(long)]
     pub validate: bool,
+}
+
+pub fn parse_animation(text: &str) -> Result<strata::scene::animation::AnimationChoice, String> {
+    if text.is_empty() {
+        return Err("name an animation clip, or give its index".into());
+    }
+    Ok(strata::scene::animation::AnimationChoice::parse(text))
 }
 
 pub fn parse_sampler(text: &str) -> Result<strata::scene::settings::SamplerKind, String> {

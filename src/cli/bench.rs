@@ -431,6 +431,7 @@ fn bench_gbuffer(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         mesh: 0,
         node: None,
         world_from_object: glam::Mat4::IDENTITY,
+        node_from_object: glam::Mat4::IDENTITY,
     });
     println!("G-buffer pass, GPU time per sample (median of {} samples) on {}", args.samples, gpu.device.report.name);
     println!("{:<12} {:>10} {:>10} {:<22} {:>10}", "scene", "size", "triangles", "bump", "ms/sample");

@@ -4,6 +4,9 @@ use super::print_stdout;
 use anyhow::{bail, Context as _, Result};
 
 pub fn info(args: InfoArgs) -> Result<()> {
+    if let Some(path) = &args.scene {
+        return scene_info(path);
+    }
     let mut text = String::new();
     macro_rules! out {
         ($($arg:tt)*) => {{
@@ -55,5 +58,45 @@ pub fn info(args: InfoArgs) -> Result<()> {
              install Mesa's lavapipe, which has both"
         );
     }
+    Ok(())
+}
+
+/// `strata info SCENE`: what the file holds, every animation clip included (the file as loaded before one clip is
+/// chosen to play).
+fn scene_info(path: &std::path::Path) -> Result<()> {
+    use std::fmt::Write as _;
+    let is_toml = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let scene = if is_toml {
+        strata::scene::scene_file::load_scene_file(path, None)?.scene
+    } else {
+        strata::scene::gltf_import::load_gltf(path, &Default::default())?
+    };
+    let mut text = String::new();
+    let _ = writeln!(text, "{}:", path.display());
+    let _ = writeln!(
+        text,
+        "  {} meshes, {} instances, {} triangles; {} materials, {} textures",
+        scene.meshes.len(),
+        scene.instances.len(),
+        scene.triangle_count(),
+        scene.materials.len(),
+        scene.textures.len()
+    );
+    let names = |names: Vec<&str>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
+    let _ = writeln!(text, "  cameras: {}", names(scene.cameras.iter().map(|c| c.name.as_str()).collect()));
+    let _ = writeln!(text, "  lights: {}", names(scene.lights.iter().map(|l| l.name.as_str()).collect()));
+    if scene.animations.is_empty() {
+        let _ = writeln!(text, "  animation clips: none");
+    } else {
+        let _ = writeln!(text, "  animation clips (--animation NAME|INDEX; the first plays unless one is named):");
+        for (i, clip) in scene.animations.iter().enumerate() {
+            let (duration, channels) = (clip.duration(), clip.channels.len());
+            let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channels", clip.name);
+        }
+    }
+    for warning in &scene.warnings {
+        let _ = writeln!(text, "  warning: {warning}");
+    }
+    print_stdout(&text);
     Ok(())
 }

@@ -193,10 +193,16 @@ struct SceneJob {
 /// checks every output name and the files the run writes, reads and removes before any work. None: this shard
 /// has nothing to do.
 fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Option<SceneJob>> {
-    let options = strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true) };
+    let options =
+        strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true), animation: args.animation.clone() };
     let loaded = strata::load(scene_path, &options)?;
     for warning in &loaded.scene.warnings {
         eprintln!("warning: {}: {warning}", scene_path.display());
+    }
+    if !args.quiet {
+        for note in &loaded.scene.notes {
+            eprintln!("note: {}: {note}", scene_path.display());
+        }
     }
     let mut settings =
         strata::scene::settings::RenderSettings::default().with(&loaded.settings).with(&args.overrides());

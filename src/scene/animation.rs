@@ -117,7 +117,71 @@ impl Channel {
     }
 }
 
+/// Which of a file's animation clips plays (`--animation`, the scene file's `animation`): viewers play one clip
+/// at a time, the first unless told otherwise.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AnimationChoice {
+    Index(usize),
+    Name(String),
+}
+
+impl AnimationChoice {
+    /// A clip's index (digits) or its name.
+    pub fn parse(text: &str) -> Self {
+        match text.parse() {
+            Ok(index) => Self::Index(index),
+            Err(_) => Self::Name(text.to_string()),
+        }
+    }
+}
+
+/// "0 \"Survey\" (4.3 s), 1 \"Walk\" (0.7 s)": the clips, for listings and errors.
+pub fn list_clips(animations: &[Animation]) -> String {
+    let clips: Vec<String> =
+        animations.iter().enumerate().map(|(i, a)| format!("{i} \"{}\" ({:.2} s)", a.name, a.duration())).collect();
+    clips.join(", ")
+}
+
+/// Keeps only the clip `choice` names (the first when None) of `animations`, as viewers play one clip at a time.
+/// Returns a note for the user when the file has several and none was chosen; an unknown clip is an error that
+/// lists the file's clips.
+pub fn select_clip(animations: &mut Vec<Animation>, choice: Option<&AnimationChoice>) -> Result<Option<String>> {
+    let index = match choice {
+        None => 0,
+        Some(AnimationChoice::Index(i)) => *i,
+        Some(AnimationChoice::Name(name)) => match animations.iter().position(|a| &a.name == name) {
+            Some(i) => i,
+            None if animations.is_empty() => bail!("no animation clip \"{name}\": the scene has no animations"),
+            None => bail!("no animation clip \"{name}\" (clips: {})", list_clips(animations)),
+        },
+    };
+    if index >= animations.len().max(1) {
+        match animations.len() {
+            0 => bail!("no animation clip {index}: the scene has no animations"),
+            _ => bail!("no animation clip {index} (clips: {})", list_clips(animations)),
+        }
+    }
+    let note = (choice.is_none() && animations.len() > 1).then(|| {
+        format!(
+            "playing animation clip 0 \"{}\" of {} ({}); --animation NAME|INDEX picks another",
+            animations[0].name,
+            animations.len(),
+            list_clips(animations)
+        )
+    });
+    if !animations.is_empty() {
+        let chosen = animations.swap_remove(index);
+        *animations = vec![chosen];
+    }
+    Ok(note)
+}
+
 impl Animation {
+    /// The clip's length: its last key time (0 for a clip without keys).
+    pub fn duration(&self) -> f32 {
+        self.channels.iter().filter_map(|c| c.times.last().copied()).fold(0.0, f32::max)
+    }
+
     /// Overwrites the animated properties of `locals` with their values at `t`.
     pub fn apply(&self, t: f32, locals: &mut [NodeTransform]) {
         for channel in &self.channels {

@@ -144,16 +144,122 @@ pub fn check_format(
     Ok(())
 }
 
-/// The formats glTF allows per attribute semantic; `None` for semantics strata does not read.
-pub fn attribute_formats(semantic: &gltf::Semantic) -> Option<(&'static [gltf::accessor::Dimensions], AllowedTypes)> {
+/// The formats glTF allows per attribute semantic; `None` for semantics strata does not read. With `quantized`
+/// (the file uses `KHR_mesh_quantization`), the extension's integer formats too.
+pub fn attribute_formats(
+    semantic: &gltf::Semantic,
+    quantized: bool,
+) -> Option<(&'static [gltf::accessor::Dimensions], AllowedTypes)> {
     use gltf::accessor::{DataType::*, Dimensions::*};
     const FLOAT: AllowedTypes = &[(F32, false)];
     const UV: AllowedTypes = &[(F32, false), (U8, true), (U16, true)];
-    Some(match semantic {
-        gltf::Semantic::Positions | gltf::Semantic::Normals => (&[Vec3], FLOAT),
-        gltf::Semantic::Tangents => (&[Vec4], FLOAT),
-        gltf::Semantic::TexCoords(_) => (&[Vec2], UV),
-        gltf::Semantic::Colors(_) => (&[Vec3, Vec4], UV),
+    Some(match (semantic, quantized) {
+        (gltf::Semantic::Positions, true) => (&[Vec3], QUANTIZED_POSITION),
+        (gltf::Semantic::Normals, true) => (&[Vec3], QUANTIZED_DIRECTION),
+        (gltf::Semantic::Tangents, true) => (&[Vec4], QUANTIZED_DIRECTION),
+        (gltf::Semantic::TexCoords(_), true) => (&[Vec2], QUANTIZED_TEXCOORD),
+        (gltf::Semantic::Positions | gltf::Semantic::Normals, false) => (&[Vec3], FLOAT),
+        (gltf::Semantic::Tangents, false) => (&[Vec4], FLOAT),
+        (gltf::Semantic::TexCoords(_), false) => (&[Vec2], UV),
+        (gltf::Semantic::Colors(_), _) => (&[Vec3, Vec4], UV),
         _ => return None,
     })
+}
+
+/// `KHR_mesh_quantization`'s component types: positions (and morph targets' position displacements) of any
+/// integer type up to 16 bits, normalized or not; normals and tangents (and their displacements) normalized
+/// signed integers; texture coordinates any of them too.
+pub const QUANTIZED_POSITION: AllowedTypes = &[
+    (gltf::accessor::DataType::F32, false),
+    (gltf::accessor::DataType::I8, false),
+    (gltf::accessor::DataType::I8, true),
+    (gltf::accessor::DataType::U8, false),
+    (gltf::accessor::DataType::U8, true),
+    (gltf::accessor::DataType::I16, false),
+    (gltf::accessor::DataType::I16, true),
+    (gltf::accessor::DataType::U16, false),
+    (gltf::accessor::DataType::U16, true),
+];
+pub const QUANTIZED_DIRECTION: AllowedTypes = &[
+    (gltf::accessor::DataType::F32, false),
+    (gltf::accessor::DataType::I8, true),
+    (gltf::accessor::DataType::I16, true),
+];
+pub const QUANTIZED_TEXCOORD: AllowedTypes = QUANTIZED_POSITION;
+/// Morph targets' position displacements: signed types only (a displacement may point either way).
+pub const QUANTIZED_DISPLACEMENT: AllowedTypes = &[
+    (gltf::accessor::DataType::F32, false),
+    (gltf::accessor::DataType::I8, false),
+    (gltf::accessor::DataType::I8, true),
+    (gltf::accessor::DataType::I16, false),
+    (gltf::accessor::DataType::I16, true),
+];
+
+/// An integer component as a float: normalized values map to [0, 1] or [−1, 1] (glTF 2.0 §3.11's table:
+/// c / (2ⁿ − 1) unsigned, max(c / (2ⁿ⁻¹ − 1), −1) signed), the others convert as they are
+/// (`KHR_mesh_quantization`; the node's transform scales them back).
+trait Component: gltf::accessor::Item + Copy {
+    fn to_f32(self, normalized: bool) -> f32;
+}
+
+macro_rules! component {
+    ($t:ty, $max:expr) => {
+        impl Component for $t {
+            fn to_f32(self, normalized: bool) -> f32 {
+                if normalized {
+                    (f32::from(self) / $max).max(-1.0)
+                } else {
+                    f32::from(self)
+                }
+            }
+        }
+    };
+}
+component!(i8, 127.0);
+component!(u8, 255.0);
+component!(i16, 32767.0);
+component!(u16, 65535.0);
+
+impl Component for f32 {
+    fn to_f32(self, _: bool) -> f32 {
+        self
+    }
+}
+
+fn read_as<C: Component, const N: usize>(accessor: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> Option<Vec<[f32; N]>>
+where
+    [C; N]: gltf::accessor::Item,
+{
+    let normalized = accessor.normalized();
+    let values = gltf::accessor::Iter::<[C; N]>::new(accessor.clone(), |b: gltf::Buffer<'_>| {
+        buffers.get(b.index()).map(Vec::as_slice)
+    })?;
+    Some(values.map(|v| v.map(|c| c.to_f32(normalized))).collect())
+}
+
+/// An accessor of N-component vectors as floats, whatever component type it holds (sparse substitutions
+/// applied), after `check_format` and `check_accessor` passed; a length mismatch is an error.
+pub fn read_floats<const N: usize>(
+    what: &str,
+    accessor: &gltf::Accessor<'_>,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<[f32; N]>>
+where
+    [f32; N]: gltf::accessor::Item,
+    [i8; N]: gltf::accessor::Item,
+    [u8; N]: gltf::accessor::Item,
+    [i16; N]: gltf::accessor::Item,
+    [u16; N]: gltf::accessor::Item,
+{
+    use gltf::accessor::DataType::*;
+    let values = match accessor.data_type() {
+        F32 => read_as::<f32, N>(accessor, buffers),
+        I8 => read_as::<i8, N>(accessor, buffers),
+        U8 => read_as::<u8, N>(accessor, buffers),
+        I16 => read_as::<i16, N>(accessor, buffers),
+        U16 => read_as::<u16, N>(accessor, buffers),
+        U32 => bail!("{what}: accessor {} holds U32 components, which no vertex attribute may", accessor.index()),
+    };
+    let values = values.with_context(|| format!("{what}: accessor {} cannot be read", accessor.index()))?;
+    collect_exact(what, accessor, values.into_iter())
 }

@@ -5,7 +5,7 @@
 use super::animation::{vec4_from_xyz, Channel, Interpolation, Property};
 use super::gltf_accessors::{check_accessor, check_format};
 use super::gltf_material::{load_images, mark_color_textures, material, textures, warn_about_unread_uv_sets};
-use super::gltf_mesh::{import_mesh, meshes_at_node_weights};
+use super::gltf_mesh::{import_mesh, meshes_at_node_weights, uses_quantization};
 use super::gltf_uri::{read_uri, UriPolicy};
 use super::{Animation, Camera, Instance, Light, LightShape, Node, NodeTransform, Projection, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -13,13 +13,15 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 7] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
+    "EXT_mesh_gpu_instancing",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
 
@@ -59,11 +61,12 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
     warn_about_unread_uv_sets(&mut scene);
+    let quantized = uses_quantization(document);
     for mesh in document.meshes() {
-        scene.meshes.push(import_mesh(&mesh, &buffers, mesh.weights().unwrap_or(&[]))?);
+        scene.meshes.push(import_mesh(&mesh, &buffers, mesh.weights().unwrap_or(&[]), quantized)?);
     }
     let node_meshes = meshes_at_node_weights(document, &buffers, &mut scene)?;
-    import_nodes(document, &mut scene, &node_meshes)?;
+    import_nodes(document, &buffers, &mut scene, &node_meshes)?;
     for animation in document.animations() {
         let a = import_animation(&animation, &buffers, &scene)
             .with_context(|| format!("animation {}", animation.index()))?;
@@ -138,9 +141,33 @@ fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
         }
     }
     // Any other panic in third-party validation becomes an error rather than taking the process down.
-    match std::panic::catch_unwind(|| gltf::Gltf::from_slice(bytes)) {
+    match std::panic::catch_unwind(|| validated(gltf::Gltf::from_slice_without_validation(bytes)?)) {
         Ok(result) => result.map_err(|e| anyhow!("not a valid glTF file: {e}")),
         Err(_) => bail!("not a valid glTF file: the gltf parser failed on it (malformed input)"),
+    }
+}
+
+/// The gltf crate's validation (`Gltf::from_slice`'s), except that an extension it has no feature for but strata
+/// implements (`KHR_mesh_quantization`, read in gltf_accessors) may be required: check_required_extensions has
+/// already refused those strata lacks.
+fn validated(gltf: gltf::Gltf) -> std::result::Result<gltf::Gltf, gltf::Error> {
+    use gltf::json::validation::{Error, Validate};
+    let root = gltf.document.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| errors.push((path(), error)));
+    errors.retain(|(path, error)| {
+        // The path reads `extensionsRequired[i] = "NAME"`.
+        let required = path.as_str().strip_prefix("extensionsRequired[").and_then(|rest| rest.split(']').next());
+        let implemented = required
+            .and_then(|i| i.parse::<usize>().ok())
+            .and_then(|i| root.extensions_required.get(i))
+            .is_some_and(|e| SUPPORTED_EXTENSIONS.contains(&e.as_str()));
+        !(*error == Error::Unsupported && implemented)
+    });
+    if errors.is_empty() {
+        Ok(gltf)
+    } else {
+        Err(gltf::Error::Validation(errors))
     }
 }
 
@@ -224,7 +251,12 @@ fn node_transform(node: &gltf::Node<'_>) -> NodeTransform {
 }
 
 /// `node_meshes`: the mesh each node draws (meshes_at_node_weights).
-fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Option<usize>]) -> Result<()> {
+fn import_nodes(
+    document: &gltf::Document,
+    buffers: &[Vec<u8>],
+    scene: &mut Scene,
+    node_meshes: &[Option<usize>],
+) -> Result<()> {
     scene.nodes = document
         .nodes()
         .map(|n| Node {
@@ -247,7 +279,19 @@ fn import_nodes(document: &gltf::Document, scene: &mut Scene, node_meshes: &[Opt
         let gltf_node = &gltf_nodes[i];
         let name = scene.nodes[i].name.clone();
         if let Some(mesh) = scene.nodes[i].mesh {
-            scene.instances.push(Instance { name: name.clone(), mesh, node: Some(i), world_from_object: world[i] });
+            let copies = super::gltf_instancing::node_instances(document, gltf_node, buffers)
+                .with_context(|| format!("node \"{name}\": EXT_mesh_gpu_instancing"))?;
+            for (k, node_from_object) in copies.iter().enumerate() {
+                let name = if copies.len() == 1 { name.clone() } else { format!("{name} #{k}") };
+                let world_from_object = world[i] * *node_from_object;
+                scene.instances.push(Instance {
+                    name,
+                    mesh,
+                    node: Some(i),
+                    world_from_object,
+                    node_from_object: *node_from_object,
+                });
+            }
         }
         if let Some(camera) = gltf_node.camera() {
             let projection = match camera.projection() {

@@ -1,17 +1,30 @@
 //! glTF meshes: each primitive's attributes, bounds-checked before they are read, with morph targets applied
 //! at the mesh's or a node's weights, flat normals where the file has none, and the surface derivatives bump
 //! mapping needs.
-use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact};
+use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact, read_floats};
 use super::surface::compute_surface_derivatives;
 use super::{Mesh, Primitive, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3, Vec4};
 
-pub(super) fn import_mesh(mesh: &gltf::Mesh<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Mesh> {
+/// Whether `document` uses `KHR_mesh_quantization`, which lets vertex attributes hold integers.
+pub(super) fn uses_quantization(document: &gltf::Document) -> bool {
+    document.extensions_used().any(|e| e == QUANTIZATION)
+}
+
+const QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// A mesh's primitives at `weights`; `quantized`: the file uses `KHR_mesh_quantization`.
+pub(super) fn import_mesh(
+    mesh: &gltf::Mesh<'_>,
+    buffers: &[Vec<u8>],
+    weights: &[f32],
+    quantized: bool,
+) -> Result<Mesh> {
     let name = mesh.name().map(str::to_owned).unwrap_or_else(|| format!("mesh {}", mesh.index()));
     let mut primitives = Vec::new();
     for (p_index, primitive) in mesh.primitives().enumerate() {
-        let p = import_primitive(&primitive, buffers, weights)
+        let p = import_primitive(&primitive, buffers, weights, quantized)
             .with_context(|| format!("mesh \"{name}\", primitive {p_index}"))?;
         primitives.push(p);
     }
@@ -35,7 +48,7 @@ pub(super) fn meshes_at_node_weights(
                 match copies.iter().find(|(m, b, _)| *m == mesh.index() && *b == bits) {
                     Some(&(_, _, copy)) => Some(copy),
                     None => {
-                        let mut copy = import_mesh(&mesh, buffers, weights)
+                        let mut copy = import_mesh(&mesh, buffers, weights, uses_quantization(document))
                             .with_context(|| format!("node {} (its own morph target weights)", node.index()))?;
                         copy.name = format!("{} (node {} weights)", copy.name, node.index());
                         scene.meshes.push(copy);
@@ -52,14 +65,28 @@ pub(super) fn meshes_at_node_weights(
 }
 
 /// One primitive, its morph targets applied at `weights` (the mesh's or a node's).
-fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weights: &[f32]) -> Result<Primitive> {
+fn import_primitive(
+    primitive: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    weights: &[f32],
+    quantized: bool,
+) -> Result<Primitive> {
     if primitive.mode() != gltf::mesh::Mode::Triangles {
         bail!("mode {:?} is not supported (only TRIANGLES)", primitive.mode());
     }
     for (semantic, accessor) in primitive.attributes() {
         let what = semantic.to_string();
-        if let Some((dimensions, types)) = attribute_formats(&semantic) {
-            check_format(&what, &accessor, dimensions, types)?;
+        if let Some((dimensions, types)) = attribute_formats(&semantic, quantized) {
+            let checked = check_format(&what, &accessor, dimensions, types);
+            // A quantized attribute in a file that does not say so: name the extension it needs.
+            if let (Err(e), false, Some((dimensions, types))) =
+                (&checked, quantized, attribute_formats(&semantic, true))
+            {
+                if check_format(&what, &accessor, dimensions, types).is_ok() {
+                    bail!("{e:#} (KHR_mesh_quantization allows it, but the file does not list it in extensionsUsed)");
+                }
+            }
+            checked?;
         }
         check_accessor(&accessor, buffers).with_context(|| what.clone())?;
     }
@@ -72,11 +99,8 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weight
     let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let position_accessor =
         primitive.get(&gltf::Semantic::Positions).ok_or_else(|| anyhow!("has no POSITION attribute"))?;
-    let positions: Vec<Vec3> = collect_exact(
-        "POSITION",
-        &position_accessor,
-        reader.read_positions().ok_or_else(|| anyhow!("POSITION cannot be read"))?.map(Vec3::from_array),
-    )?;
+    let positions: Vec<Vec3> =
+        read_floats::<3>("POSITION", &position_accessor, buffers)?.into_iter().map(Vec3::from_array).collect();
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         bail!("POSITION {i} is not finite ({})", positions[i]);
     }
@@ -92,20 +116,21 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weight
     }
     let attribute = |semantic: gltf::Semantic| primitive.get(&semantic);
     let mut p = Primitive { positions, indices, material: primitive.material().index(), ..Default::default() };
-    if let (Some(normals), Some(a)) = (reader.read_normals(), attribute(gltf::Semantic::Normals)) {
-        p.normals = collect_exact("NORMAL", &a, normals.map(|v| Vec3::from_array(v).normalize_or_zero()))?;
+    if let Some(a) = attribute(gltf::Semantic::Normals) {
+        let normals = read_floats::<3>("NORMAL", &a, buffers)?;
+        p.normals = normals.into_iter().map(|v| Vec3::from_array(v).normalize_or_zero()).collect();
         if p.normals.iter().any(|n| !n.is_finite()) {
             bail!("NORMAL holds non-finite values");
         }
     }
-    if let (Some(tangents), Some(a)) = (reader.read_tangents(), attribute(gltf::Semantic::Tangents)) {
-        p.tangents = collect_exact("TANGENT", &a, tangents.map(Vec4::from_array))?;
+    if let Some(a) = attribute(gltf::Semantic::Tangents) {
+        p.tangents = read_floats::<4>("TANGENT", &a, buffers)?.into_iter().map(Vec4::from_array).collect();
     }
-    if let (Some(uv), Some(a)) = (reader.read_tex_coords(0), attribute(gltf::Semantic::TexCoords(0))) {
-        p.uvs = collect_exact("TEXCOORD_0", &a, uv.into_f32().map(Vec2::from_array))?;
+    if let Some(a) = attribute(gltf::Semantic::TexCoords(0)) {
+        p.uvs = read_floats::<2>("TEXCOORD_0", &a, buffers)?.into_iter().map(Vec2::from_array).collect();
     }
-    if let (Some(uv), Some(a)) = (reader.read_tex_coords(1), attribute(gltf::Semantic::TexCoords(1))) {
-        p.uvs1 = collect_exact("TEXCOORD_1", &a, uv.into_f32().map(Vec2::from_array))?;
+    if let Some(a) = attribute(gltf::Semantic::TexCoords(1)) {
+        p.uvs1 = read_floats::<2>("TEXCOORD_1", &a, buffers)?.into_iter().map(Vec2::from_array).collect();
     }
     if let (Some(colors), Some(a)) = (reader.read_colors(0), attribute(gltf::Semantic::Colors(0))) {
         p.colors = collect_exact("COLOR_0", &a, colors.into_rgba_f32().map(Vec4::from_array))?;
@@ -124,7 +149,7 @@ fn import_primitive(primitive: &gltf::Primitive<'_>, buffers: &[Vec<u8>], weight
     if p.uvs.iter().chain(&p.uvs1).any(|uv| !uv.is_finite()) {
         bail!("texture coordinates hold non-finite values");
     }
-    apply_morph_targets(primitive, buffers, weights, &mut p)?;
+    apply_morph_targets(primitive, buffers, weights, quantized, &mut p)?;
     if p.normals.is_empty() {
         flatten_with_face_normals(&mut p);
     }
@@ -138,8 +163,10 @@ fn apply_morph_targets(
     primitive: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
     weights: &[f32],
+    quantized: bool,
     p: &mut Primitive,
 ) -> Result<()> {
+    use super::gltf_accessors::{QUANTIZED_DIRECTION, QUANTIZED_DISPLACEMENT};
     use gltf::accessor::{DataType, Dimensions};
     let weight = |t: usize| weights.get(t).copied().unwrap_or(0.0);
     if let Some(t) = (0..weights.len()).find(|&t| !weight(t).is_finite()) {
@@ -155,29 +182,35 @@ fn apply_morph_targets(
         {
             let Some(accessor) = accessor else { continue };
             let what = format!("morph target {t} {name}");
-            check_format(&what, &accessor, &[Dimensions::Vec3], &[(DataType::F32, false)])?;
+            let types = match (quantized, name) {
+                (false, _) => &[(DataType::F32, false)][..],
+                (true, "POSITION") => QUANTIZED_DISPLACEMENT,
+                (true, _) => QUANTIZED_DIRECTION,
+            };
+            check_format(&what, &accessor, &[Dimensions::Vec3], types)?;
             check_accessor(&accessor, buffers).with_context(|| what.clone())?;
             if accessor.count() != p.positions.len() {
                 bail!("{what} has {} entries for {} vertices", accessor.count(), p.positions.len());
             }
         }
     }
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    for (t, (positions, normals, tangents)) in reader.read_morph_targets().enumerate() {
+    for (t, target) in primitive.morph_targets().enumerate() {
         let w = weight(t);
         if w == 0.0 {
             continue;
         }
-        let deltas = |values: Option<gltf::accessor::Iter<'_, [f32; 3]>>| -> Vec<Vec3> {
-            values.map(|i| i.map(|d| w * Vec3::from_array(d)).collect()).unwrap_or_default()
+        let deltas = |name: &str, accessor: Option<gltf::Accessor<'_>>| -> Result<Vec<Vec3>> {
+            let Some(accessor) = accessor else { return Ok(Vec::new()) };
+            let values = read_floats::<3>(&format!("morph target {t} {name}"), &accessor, buffers)?;
+            Ok(values.into_iter().map(|d| w * Vec3::from_array(d)).collect())
         };
-        for (v, d) in p.positions.iter_mut().zip(deltas(positions)) {
+        for (v, d) in p.positions.iter_mut().zip(deltas("POSITION", target.positions())?) {
             *v += d;
         }
-        for (n, d) in p.normals.iter_mut().zip(deltas(normals)) {
+        for (n, d) in p.normals.iter_mut().zip(deltas("NORMAL", target.normals())?) {
             *n += d;
         }
-        for (tangent, d) in p.tangents.iter_mut().zip(deltas(tangents)) {
+        for (tangent, d) in p.tangents.iter_mut().zip(deltas("TANGENT", target.tangents())?) {
             *tangent += d.extend(0.0);
         }
     }

@@ -35,7 +35,8 @@ pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from
         light: None,
     });
     scene.roots.push(node);
-    scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object });
+    let node_from_object = Mat4::IDENTITY;
+    scene.instances.push(Instance { name: name.into(), mesh, node: Some(node), world_from_object, node_from_object });
     node
 }
 

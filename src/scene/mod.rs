@@ -6,6 +6,7 @@ pub mod environment;
 pub mod gltf_accessors;
 pub mod gltf_export;
 pub mod gltf_import;
+mod gltf_instancing;
 mod gltf_material;
 mod gltf_mesh;
 pub mod gltf_uri;
@@ -110,6 +111,9 @@ pub struct Instance {
     /// The node that places it; `None` for instances made without a hierarchy.
     pub node: Option<usize>,
     pub world_from_object: Mat4,
+    /// Where it sits in its node's space: the identity, or one of the node's `EXT_mesh_gpu_instancing`
+    /// transforms (the node's animation moves all of them).
+    pub node_from_object: Mat4,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -139,6 +143,8 @@ pub struct Scene {
     pub environment: Option<environment::Environment>,
     /// Things the loader skipped (unknown optional extensions, unsupported channels), for the user to read.
     pub warnings: Vec<String>,
+    /// What the loader chose where the file left a choice (which animation clip plays), for the user to read.
+    pub notes: Vec<String>,
 }
 
 impl Scene {
@@ -243,7 +249,7 @@ impl Scene {
     pub fn instance_transforms_from(&self, node_world: &[Mat4]) -> Vec<Mat4> {
         self.instances
             .iter()
-            .map(|i| i.node.and_then(|n| node_world.get(n).copied()).unwrap_or(i.world_from_object))
+            .map(|i| i.node.and_then(|n| node_world.get(n)).map_or(i.world_from_object, |w| *w * i.node_from_object))
             .collect()
     }
 }

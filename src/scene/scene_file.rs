@@ -24,6 +24,7 @@ struct FileRoot {
     gltf: S<String>,
     #[serde(default)]
     allow_any_uri: bool,
+    animation: Option<S<toml::Value>>,
     camera: Option<CameraSection>,
     #[serde(default, rename = "light")]
     lights: Vec<LightSection>,
@@ -125,6 +126,8 @@ struct RenderSection {
 pub struct SceneFile {
     pub scene: Scene,
     pub settings: SettingsOverrides,
+    /// The animation clip the file's `animation` key names (it plays unless the command line names another).
+    pub animation: Option<super::animation::AnimationChoice>,
     /// The glTF file it names, resolved against the scene file's directory.
     pub gltf_path: PathBuf,
 }
@@ -218,8 +221,22 @@ pub fn load_scene_file(path: &Path, uri_policy: Option<UriPolicy>) -> Result<Sce
         Some(r) => render_settings(&source, r, dir)?,
         None => SettingsOverrides::default(),
     };
+    let animation = root.animation.as_ref().map(|a| animation_choice(&source, a)).transpose()?;
     scene.source = path.to_path_buf();
-    Ok(SceneFile { scene, settings, gltf_path })
+    Ok(SceneFile { scene, settings, gltf_path, animation })
+}
+
+/// The `animation` key: a clip's name or its index.
+fn animation_choice(source: &Source<'_>, value: &S<toml::Value>) -> Result<super::animation::AnimationChoice> {
+    use super::animation::AnimationChoice;
+    match value.get_ref() {
+        toml::Value::String(name) => Ok(AnimationChoice::Name(name.clone())),
+        toml::Value::Integer(i) if *i >= 0 => Ok(AnimationChoice::Index(*i as usize)),
+        other => {
+            Err(source
+                .error(value.span(), format!("animation = {other} must be a clip's name or its index (0, 1, ...)")))
+        }
+    }
 }
 
 fn parse(source: &Source<'_>) -> Result<FileRoot> {

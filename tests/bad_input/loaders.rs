@@ -250,7 +250,8 @@ fn a_valid_glb_and_explicit_permission_load() {
     std::fs::create_dir_all(dir.join("inner")).unwrap();
     let path = gltf_with(&dir.join("inner"), "up.gltf", |d| d["buffers"][0]["uri"] = json!("../outside.bin"));
     assert!(strata::load(&path, &Default::default()).is_err());
-    let allowed = strata::load(&path, &strata::LoadOptions { allow_any_uri: Some(true) }).unwrap();
+    let allowed =
+        strata::load(&path, &strata::LoadOptions { allow_any_uri: Some(true), ..Default::default() }).unwrap();
     assert_eq!(allowed.scene.triangle_count(), 1);
 }
 
