@@ -554,3 +554,130 @@ fn gpu_instancing_places_each_copy_like_a_child_node() {
     let error = format!("{:#}", load("uneven.glb", (doc, bin)).unwrap_err());
     assert!(error.contains("EXT_mesh_gpu_instancing") && error.contains("SCALE has 2 elements"), "{error}");
 }
+
+/// 2x2 RGBA texels every encoding below holds: red, green, blue (half alpha), white.
+const TEXELS: [u8; 16] = [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 128, 255, 255, 255, 255];
+
+fn data_uri(mime: &str, bytes: &[u8]) -> String {
+    use base64::Engine as _;
+    format!("data:{mime};base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
+}
+
+/// A KTX2 file (KTX 2.0 §3) of one 2x2 level: `format` (a VkFormat), `scheme` (0 none, 1 BasisLZ, 2 Zstandard),
+/// its level's bytes as stored and their size uncompressed. A minimal data format descriptor (its size alone).
+fn ktx2(format: u32, scheme: u32, level: &[u8], uncompressed: usize) -> Vec<u8> {
+    let mut b = vec![0xAB, b'K', b'T', b'X', b' ', b'2', b'0', 0xBB, b'\r', b'\n', 0x1A, b'\n'];
+    for v in [format, 1, 2, 2, 0, 0, 1, 1, scheme] {
+        b.extend(v.to_le_bytes());
+    }
+    let (dfd, data) = (80u32 + 24, 80u64 + 24 + 4);
+    for v in [dfd, 4, 0, 0] {
+        b.extend(v.to_le_bytes());
+    }
+    b.extend([0u64, 0].iter().flat_map(|v| v.to_le_bytes()));
+    b.extend([data, level.len() as u64, uncompressed as u64].iter().flat_map(|v| v.to_le_bytes()));
+    b.extend(4u32.to_le_bytes());
+    b.extend(level);
+    b
+}
+
+/// A base-colour texture whose image comes through `extension` (KHR_texture_basisu or EXT_texture_webp) from
+/// `uri`, with `fallback` as its `source` when given.
+fn textured_triangle(extension: &str, uri: String, fallback: Option<String>) -> Value {
+    let mut images = vec![json!({"uri": uri})];
+    let mut texture = json!({"extensions": {extension: {"source": 0}}});
+    if let Some(f) = fallback {
+        images.push(json!({"uri": f}));
+        texture["source"] = json!(1);
+    }
+    json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [extension],
+        "extensionsRequired": if texture.get("source").is_some() { json!([]) } else { json!([extension]) },
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [texture],
+        "images": images,
+        "buffers": [{"byteLength": 60, "uri": data_uri("application/octet-stream",
+            &bytes_f32(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0]))}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 24}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}
+        ]
+    })
+}
+
+/// Compressed and alternative texture containers decode to their PNG twin's texels: WebP (lossless,
+/// EXT_texture_webp) and KTX2 (KHR_texture_basisu's container) as raw RGBA8, Zstandard-supercompressed RGBA8 and
+/// raw RGB8 (alpha 1), each the texture's only image. Basis Universal texels, which strata cannot transcode, are an
+/// error naming the image, or, where the texture has a PNG `source` too, a warning and the PNG.
+#[test]
+fn webp_and_ktx2_textures_decode_to_their_png_twins_texels() {
+    use image::ImageEncoder as _;
+    let dir = temp_dir("containers");
+    let load = |name: &str, doc: Value| {
+        let path = dir.join(name);
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        strata::load_scene(&path)
+    };
+    let texels_of = |scene: &strata::scene::Scene| {
+        let image = &scene.images[scene.textures[0].image];
+        assert_eq!((image.width, image.height), (2, 2));
+        image.rgba8.clone()
+    };
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png).write_image(&TEXELS, 2, 2, image::ExtendedColorType::Rgba8).unwrap();
+    let twin = load("png.gltf", textured_triangle("EXT_texture_webp", data_uri("image/png", &png), None)).unwrap();
+    assert_eq!(texels_of(&twin), TEXELS);
+    let mut webp = Vec::new();
+    image::codecs::webp::WebPEncoder::new_lossless(&mut webp)
+        .write_image(&TEXELS, 2, 2, image::ExtendedColorType::Rgba8)
+        .unwrap();
+    let rgb: Vec<u8> = TEXELS.chunks(4).flat_map(|t| [t[0], t[1], t[2]]).collect();
+    let opaque: Vec<u8> = TEXELS.chunks(4).flat_map(|t| [t[0], t[1], t[2], 255]).collect();
+    let zstd = ruzstd::encoding::compress_to_vec(&TEXELS[..], ruzstd::encoding::CompressionLevel::Fastest);
+    const R8G8B8A8_SRGB: u32 = 43;
+    const R8G8B8_UNORM: u32 = 23;
+    for (name, extension, uri, want) in [
+        ("webp", "EXT_texture_webp", data_uri("image/webp", &webp), TEXELS.to_vec()),
+        (
+            "ktx2 raw",
+            "KHR_texture_basisu",
+            data_uri("image/ktx2", &ktx2(R8G8B8A8_SRGB, 0, &TEXELS, 16)),
+            TEXELS.to_vec(),
+        ),
+        (
+            "ktx2 zstd",
+            "KHR_texture_basisu",
+            data_uri("image/ktx2", &ktx2(R8G8B8A8_SRGB, 2, &zstd, 16)),
+            TEXELS.to_vec(),
+        ),
+        ("ktx2 rgb", "KHR_texture_basisu", data_uri("image/ktx2", &ktx2(R8G8B8_UNORM, 0, &rgb, 12)), opaque),
+    ] {
+        let scene =
+            load("alt.gltf", textured_triangle(extension, uri, None)).unwrap_or_else(|e| panic!("{name}: {e:#}"));
+        assert_eq!(texels_of(&scene), want, "{name}");
+        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        // The same file as a .glb: its JSON chunk is rewritten, its binary chunk kept.
+        let path = dir.join("alt.glb");
+        std::fs::write(&path, glb(&textured_triangle(extension, data_uri("image/png", &png), None), &[1, 2, 3, 4]))
+            .unwrap();
+        assert_eq!(texels_of(&strata::load_scene(&path).unwrap_or_else(|e| panic!("{name} .glb: {e:#}"))), TEXELS);
+    }
+    let basis = data_uri("image/ktx2", &ktx2(0, 1, &[0; 16], 0));
+    let error =
+        format!("{:#}", load("basis.gltf", textured_triangle("KHR_texture_basisu", basis.clone(), None)).unwrap_err());
+    assert!(error.contains("image 0") && error.contains("Basis Universal") && error.contains("basis.gltf"), "{error}");
+    let with_png =
+        load("fallback.gltf", textured_triangle("KHR_texture_basisu", basis, Some(data_uri("image/png", &png))))
+            .unwrap();
+    assert_eq!(texels_of(&with_png), TEXELS);
+    assert!(
+        with_png.warnings.iter().any(|w| w.contains("Basis Universal") && w.contains("fallback")),
+        "{:?}",
+        with_png.warnings
+    );
+}

@@ -13,8 +13,9 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 11] = [
     "EXT_mesh_gpu_instancing",
+    "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -22,6 +23,7 @@ pub const SUPPORTED_EXTENSIONS: [&str; 9] = [
     "KHR_materials_transmission",
     "KHR_materials_unlit",
     "KHR_mesh_quantization",
+    "KHR_texture_basisu",
     "KHR_texture_transform",
 ];
 
@@ -47,6 +49,8 @@ pub fn load_gltf(path: &Path, options: &LoadOptions) -> Result<Scene> {
 /// Loads glTF from memory; relative URIs resolve against `base_dir`. (The fuzz target's entry point.)
 pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> Result<Scene> {
     check_required_extensions(bytes)?;
+    let patched = with_texture_sources(bytes)?;
+    let bytes = patched.as_deref().unwrap_or(bytes);
     let gltf = parse_and_validate(bytes)?;
     let document = &gltf.document;
     let mut scene = Scene::default();
@@ -56,8 +60,8 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
         }
     }
     let buffers = load_buffers(document, gltf.blob.as_deref(), base_dir, options.uri_policy)?;
-    scene.images = load_images(document, &buffers, base_dir, options.uri_policy)?;
-    scene.textures = textures(document);
+    let images = load_images(document, &buffers, base_dir, options.uri_policy);
+    (scene.textures, scene.images) = textures(document, images, &mut scene.warnings)?;
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
     warn_about_unread_uv_sets(&mut scene);
@@ -171,24 +175,69 @@ fn validated(gltf: gltf::Gltf) -> std::result::Result<gltf::Gltf, gltf::Error> {
     }
 }
 
+/// The JSON of a `.gltf`, or of a `.glb`'s JSON chunk.
+fn json_of(bytes: &[u8]) -> Result<&[u8]> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(bytes);
+    }
+    // GLB: 12-byte header, then the JSON chunk (length, type "JSON", data); glTF 2.0 §4.4.
+    if bytes.len() < 20 {
+        bail!("truncated .glb: {} bytes is shorter than its header", bytes.len());
+    }
+    let chunk_len = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
+    if &bytes[16..20] != b"JSON" {
+        bail!(".glb: the first chunk is not JSON");
+    }
+    bytes
+        .get(20..20usize.saturating_add(chunk_len))
+        .ok_or_else(|| anyhow!("truncated .glb: JSON chunk overruns the file"))
+}
+
+/// A texture whose only image is a KTX2 or WebP one (KHR_texture_basisu, EXT_texture_webp with no fallback
+/// `source`) is valid glTF, but the gltf crate needs a `source`: the file with each such texture's extension
+/// image copied into its `source` (None when no texture lacks one). A `.glb` keeps its other chunks as they are.
+fn with_texture_sources(bytes: &[u8]) -> Result<Option<Vec<u8>>> {
+    let Ok(mut root) = serde_json::from_slice::<serde_json::Value>(json_of(bytes)?) else { return Ok(None) };
+    let mut changed = false;
+    for texture in root.get_mut("textures").and_then(|t| t.as_array_mut()).into_iter().flatten() {
+        if texture.get("source").is_some() {
+            continue;
+        }
+        let source = ["KHR_texture_basisu", "EXT_texture_webp"]
+            .iter()
+            .find_map(|ext| texture.get("extensions")?.get(ext)?.get("source").cloned());
+        if let (Some(source), Some(object)) = (source, texture.as_object_mut()) {
+            object.insert("source".into(), source);
+            changed = true;
+        }
+    }
+    if !changed {
+        return Ok(None);
+    }
+    let mut json = serde_json::to_vec(&root)?;
+    if !bytes.starts_with(b"glTF") {
+        return Ok(Some(json));
+    }
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let old_chunk_end = 20 + json_of(bytes)?.len();
+    let rest = &bytes[old_chunk_end..];
+    let total = 20 + json.len() + rest.len();
+    let mut glb = Vec::with_capacity(total);
+    glb.extend_from_slice(&bytes[..8]);
+    glb.extend(u32::try_from(total).context(".glb grows past 4 GiB")?.to_le_bytes());
+    glb.extend((json.len() as u32).to_le_bytes());
+    glb.extend_from_slice(b"JSON");
+    glb.extend(json);
+    glb.extend_from_slice(rest);
+    Ok(Some(glb))
+}
+
 /// Reads `extensionsRequired` from the raw JSON (of a `.gltf` or a `.glb`'s JSON chunk) before anything else,
 /// so a file that needs an extension strata lacks gets an error that names it.
 fn check_required_extensions(bytes: &[u8]) -> Result<()> {
-    let json: &[u8] = if bytes.starts_with(b"glTF") {
-        // GLB: 12-byte header, then the JSON chunk (length, type "JSON", data); glTF 2.0 §4.4.
-        if bytes.len() < 20 {
-            bail!("truncated .glb: {} bytes is shorter than its header", bytes.len());
-        }
-        let chunk_len = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
-        if &bytes[16..20] != b"JSON" {
-            bail!(".glb: the first chunk is not JSON");
-        }
-        bytes
-            .get(20..20usize.saturating_add(chunk_len))
-            .ok_or_else(|| anyhow!("truncated .glb: JSON chunk overruns the file"))?
-    } else {
-        bytes
-    };
+    let json = json_of(bytes)?;
     #[derive(serde::Deserialize)]
     struct Root {
         #[serde(default, rename = "extensionsRequired")]

@@ -1,25 +1,25 @@
 //! glTF materials, textures and images: the metallic-roughness material with the extensions strata reads
-//! (emissive strength, IOR, specular, transmission, texture transforms), samplers, and PNG/JPEG decoding with
-//! a size limit.
+//! (emissive strength, IOR, specular, transmission, unlit, texture transforms), samplers, and which image each
+//! texture reads (its KTX2 or WebP alternative, or its source; decoding is image_decode's).
 use super::gltf_uri::{read_uri, UriPolicy};
+use super::image_decode::decode_image;
 use super::material::{AlphaMode, Material, MipFilter, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
 use super::Scene;
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3, Vec4};
 use std::path::Path;
 
-/// Largest image side accepted (a corrupt header must not make strata allocate gigabytes).
-const MAX_IMAGE_SIDE: u32 = 16384;
-
+/// Every image of the file, read and decoded; an image that fails is its error, for [`textures`] to judge (a
+/// texture's KTX2 or WebP alternative may fail where its fallback PNG serves).
 pub(super) fn load_images(
     document: &gltf::Document,
     buffers: &[Vec<u8>],
     base: &Path,
     policy: UriPolicy,
-) -> Result<Vec<TextureImage>> {
+) -> Vec<Result<TextureImage>> {
     document
         .images()
-        .map(|image| {
+        .map(|image| -> Result<TextureImage> {
             let name = image.name().map(str::to_owned).unwrap_or_else(|| format!("image {}", image.index()));
             let (bytes, mime) = match image.source() {
                 gltf::image::Source::View { view, mime_type } => {
@@ -38,38 +38,61 @@ pub(super) fn load_images(
         .collect()
 }
 
-fn decode_image(name: &str, bytes: &[u8], mime: Option<&str>) -> Result<TextureImage> {
-    let format = match mime {
-        Some("image/png") => image::ImageFormat::Png,
-        Some("image/jpeg") => image::ImageFormat::Jpeg,
-        _ => image::guess_format(bytes).context("unknown image format (strata reads PNG and JPEG)")?,
-    };
-    let mut reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_IMAGE_SIDE);
-    limits.max_image_height = Some(MAX_IMAGE_SIDE);
-    reader.limits(limits);
-    let decoded = reader.decode()?.to_rgba8();
-    Ok(TextureImage {
-        name: name.to_owned(),
-        width: decoded.width(),
-        height: decoded.height(),
-        rgba8: decoded.into_raw(),
+/// Extensions that give a texture another image (KTX2, WebP) beside or instead of its `source`.
+const IMAGE_EXTENSIONS: [&str; 2] = ["KHR_texture_basisu", "EXT_texture_webp"];
+
+/// The image a texture's KHR_texture_basisu or EXT_texture_webp names, if any.
+fn extension_image(texture: &gltf::Texture<'_>) -> Option<(&'static str, usize)> {
+    IMAGE_EXTENSIONS.into_iter().find_map(|ext| {
+        let source = texture.extension_value(ext)?.get("source")?.as_u64()?;
+        Some((ext, source as usize))
     })
 }
 
-/// The file's textures: each names its image and its sampler; `srgb` is set later from the materials that use
-/// it (mark_color_textures).
-pub(super) fn textures(document: &gltf::Document) -> Vec<Texture> {
-    document
-        .textures()
-        .map(|t| Texture {
-            name: t.name().map(str::to_owned).unwrap_or_else(|| format!("texture {}", t.index())),
-            image: t.source().index(),
-            sampler: sampler(&t.sampler()),
-            srgb: false,
+/// The file's textures, each with the image it reads: its extension's (KTX2, WebP) where that decodes, else its
+/// `source`; and the file's images, where one that no texture can read fails the load and one only a fallback
+/// replaced becomes a 1x1 placeholder with a warning. `srgb` is set later from the materials that use each
+/// texture (mark_color_textures).
+pub(super) fn textures(
+    document: &gltf::Document,
+    images: Vec<Result<TextureImage>>,
+    warnings: &mut Vec<String>,
+) -> Result<(Vec<Texture>, Vec<TextureImage>)> {
+    let mut excused = vec![false; images.len()];
+    let mut textures = Vec::new();
+    for t in document.textures() {
+        let name = t.name().map(str::to_owned).unwrap_or_else(|| format!("texture {}", t.index()));
+        let fallback = t.source().index();
+        let image = match extension_image(&t) {
+            Some((ext, index)) if index >= images.len() => bail!("{name}: its {ext} image {index} does not exist"),
+            Some((_, index)) if images[index].is_ok() => index,
+            Some((ext, index)) if index != fallback && images.get(fallback).is_some_and(Result::is_ok) => {
+                if let Err(e) = &images[index] {
+                    warnings
+                        .push(format!("{name}: its {ext} image does not decode ({e:#}); reading its fallback source"));
+                }
+                excused[index] = true;
+                fallback
+            }
+            _ => fallback,
+        };
+        textures.push(Texture { name, image, sampler: sampler(&t.sampler()), srgb: false });
+    }
+    let images = images
+        .into_iter()
+        .enumerate()
+        .map(|(i, image)| match image {
+            Ok(image) => Ok(image),
+            Err(_) if excused[i] => Ok(TextureImage {
+                name: format!("image {i} (unread)"),
+                width: 1,
+                height: 1,
+                rgba8: vec![255, 0, 255, 255],
+            }),
+            Err(e) => Err(e),
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    Ok((textures, images))
 }
 
 fn sampler(s: &gltf::texture::Sampler<'_>) -> Sampler {

@@ -10,6 +10,7 @@ mod gltf_instancing;
 mod gltf_material;
 mod gltf_mesh;
 pub mod gltf_uri;
+pub mod image_decode;
 pub mod library;
 pub mod light;
 pub mod material;
