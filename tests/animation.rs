@@ -213,7 +213,8 @@ fn one_animation_clip_plays_the_first_unless_another_is_named() {
     let listing = String::from_utf8_lossy(&info.stdout);
     assert!(info.status.success(), "{}", outcome(&info));
     assert!(
-        listing.contains("[0] \"Slide\": 1.000 s, 1 channels") && listing.contains("[1] \"Lift\": 2.000 s"),
+        listing.contains("[0] \"Slide\": 1.000 s, 1 channels strata plays")
+            && listing.contains("[1] \"Lift\": 2.000 s"),
         "{listing}"
     );
     let out = dir.join("jog.png");

@@ -91,7 +91,7 @@ fn scene_info(path: &std::path::Path) -> Result<()> {
         let _ = writeln!(text, "  animation clips (--animation NAME|INDEX; the first plays unless one is named):");
         for (i, clip) in scene.animations.iter().enumerate() {
             let (duration, channels) = (clip.duration(), clip.channels.len());
-            let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channels", clip.name);
+            let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channels strata plays", clip.name);
         }
     }
     for warning in &scene.warnings {
