@@ -78,26 +78,37 @@ pub fn render_preview(
 }
 
 /// Renders the G-buffer once (pinhole through the lens centre, no jitter, at the shutter's opening) and returns
-/// the requested AOVs as raw values.
+/// the requested AOVs as raw values; `frame_interval` (seconds) is how far ahead the motion AOV looks.
 pub fn render_aovs(
-    gpu: &vk::Gpu,
+    device: &std::sync::Arc<vk::Device>,
     scene: &scene::Scene,
     on_gpu: &render::SceneOnGpu,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     aovs: &[render::aov::Aov],
+    frame_interval: f32,
 ) -> Result<Vec<(render::aov::Aov, output::Frame)>> {
-    let device = &gpu.device;
     let pass = render::gbuffer::GBufferPass::new(device)?;
     let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
-    let transforms = scene.instance_transforms_at(scene.shutter.0);
+    let (now, next) = (scene.shutter.0, scene.shutter.0 + frame_interval);
+    let transforms = scene.instance_transforms_at(now);
     let materials = pass.materials(scene, &on_gpu.textures)?;
     let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
-    let mut camera = scene.camera_at(scene.shutter.0);
-    camera.lens.aperture_radius = 0.0;
-    let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO);
+    let pinhole_at = |t: f32| {
+        let mut camera = scene.camera_at(t);
+        camera.lens.aperture_radius = 0.0;
+        math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO)
+    };
+    let sample = pinhole_at(now);
     let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
-    aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame)?))).collect()
+    let labels = scene.instances.iter().map(|i| i.node.map_or(0, |n| n as u32 + 1)).collect();
+    let aov_scene = render::aov::AovScene {
+        instance_labels: labels,
+        next: scene.instance_transforms_at(next),
+        now: transforms,
+        camera_now: sample,
+        camera_next: pinhole_at(next),
+    };
+    aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame, &aov_scene)?))).collect()
 }
 
 /// Renders `scene` with distributed ray tracing: `settings.spp` samples of G-buffer + accumulation, then the

@@ -515,7 +515,8 @@ fn aov_case(name: &str, spec: &SceneSpec, ctx: &CaseContext<'_>, report: &mut Ca
     }
     let on_gpu = SceneOnGpu::upload(&ctx.gpu.device, &scene)?;
     let aovs: Vec<Aov> = AOV_CHANNELS.iter().map(|(a, _)| *a).collect();
-    let frames = crate::render_aovs(ctx.gpu, &scene, &on_gpu, settings.width, settings.height, &aovs)?;
+    let frames =
+        crate::render_aovs(&ctx.gpu.device, &scene, &on_gpu, (settings.width, settings.height), &aovs, 1.0 / 24.0)?;
     drop(on_gpu);
     let device = ctx.device_key();
     let mut figures = Vec::new();

@@ -124,6 +124,11 @@ pub struct RenderArgs {
     /// Also write the linear radiance to this OpenEXR file (with the --aov layers, if any).
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
+    /// Also write each frame's camera to this JSON file: the image size, the intrinsics K (pixels, OpenCV's axes),
+    /// yfov (radians, as glTF), world_from_camera (glTF's axes) and the OpenCV-axes pose, near/far, the frame's
+    /// time and exposure. Numbered per frame as -o is (a run of # sets the digits); {name} as in -o.
+    #[arg(long, value_name = "FILE.json")]
+    pub camera_json: Option<PathBuf>,
     /// Image size in pixels, each side 1 to 16384 [default: the scene file's, else 960x540].
     #[arg(long, value_name = "WxH", value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
@@ -218,8 +223,10 @@ pub struct RenderArgs {
     #[arg(long, value_name = "X", value_parser = parse_intensity)]
     pub environment_intensity: Option<f32>,
     /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
-    /// emission, material. With an .exr they are layers of the EXR (raw values); with -o x.png each is a PNG
-    /// beside it, x.<name>.png (normals as ½+½n, depth and height scaled to their range).
+    /// emission, material; and the labels a dataset needs: instance (the glTF node index + 1 each pixel's centre
+    /// sees, 0 for nothing) and motion (forward flow in pixels to one frame, 1/--fps, later). With an .exr they
+    /// are layers of the EXR (raw values); with -o x.png each is a PNG beside it, x.<name>.png (normals as ½+½n,
+    /// depth and height scaled to their range, labels as colours). docs/outputs.md says what each holds.
     #[arg(long, value_name = "LIST", value_parser = parse_aovs)]
     pub aov: Option<AovList>,
     /// Look from an orbit around the scene (or --target): azimuth THETA about +Y in degrees from +Z towards +X

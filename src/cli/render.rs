@@ -122,13 +122,49 @@ fn frame_files(
     output: &std::path::Path,
     exr: Option<&std::path::Path>,
     aovs: &[strata::render::aov::Aov],
+    camera_json: Option<&std::path::Path>,
 ) -> Result<Vec<(&'static str, std::path::PathBuf)>> {
     let mut files = vec![("-o", output.to_path_buf())];
     if strata::output::OutputFormat::from_path(output)? == strata::output::OutputFormat::Png {
         files.extend(aovs.iter().map(|&aov| ("an --aov file", aov_png_path(output, aov))));
     }
     files.extend(exr.map(|e| ("--exr", e.to_path_buf())));
+    files.extend(camera_json.map(|c| ("--camera-json", c.to_path_buf())));
     Ok(files)
+}
+
+/// `--camera-json` for `scene`: its `{name}` filled in; it must name a .json file.
+fn camera_json_for(args: &RenderArgs, scene: &std::path::Path) -> Result<Option<std::path::PathBuf>> {
+    let Some(path) = &args.camera_json else { return Ok(None) };
+    let path = for_scene(path, scene)?;
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json")) {
+        bail!("--camera-json {}: the file name must end in .json", path.display());
+    }
+    Ok(Some(path))
+}
+
+/// The camera a frame was rendered with, at its time (the shutter's opening), and the exposure it was shown at.
+fn camera_metadata(job: &SceneJob, picture: &Picture) -> strata::scene::camera::CameraMetadata {
+    strata::scene::camera::CameraMetadata {
+        width: job.settings.width,
+        height: job.settings.height,
+        camera: job.scene.camera_at(job.scene.shutter.0),
+        time: job.scene.shutter.0,
+        exposure: match picture {
+            Picture::Rendered(r) => r.exposure,
+            Picture::Preview(_) => job.settings.exposure,
+        },
+    }
+}
+
+/// Writes a frame's camera (`--camera-json`) whole or not at all.
+fn write_camera_json(path: &std::path::Path, metadata: &strata::scene::camera::CameraMetadata) -> Result<()> {
+    let staged = strata::output::stage(path, |file| {
+        serde_json::to_writer_pretty(&mut *file, &metadata.to_json())?;
+        std::io::Write::write_all(file, b"\n")?;
+        Ok(())
+    })?;
+    staged.commit()
 }
 
 /// Before a batch renders: every scene's files are its own (two `Box.gltf` from two folders would write one
@@ -137,7 +173,10 @@ fn check_batch(output: &std::path::Path, args: &RenderArgs) -> Result<()> {
     let mut plan = strata::write_plan::WritePlan::new();
     for scene in &args.scenes {
         let exr = args.exr.as_ref().map(|e| for_scene(e, scene)).transpose()?;
-        for (role, path) in frame_files(&for_scene(output, scene)?, exr.as_deref(), aov_list(args))? {
+        let camera_json = camera_json_for(args, scene)?;
+        for (role, path) in
+            frame_files(&for_scene(output, scene)?, exr.as_deref(), aov_list(args), camera_json.as_deref())?
+        {
             plan.writes(&format!("{role} of {}", scene.display()), &path)?;
         }
     }
@@ -150,6 +189,7 @@ fn check_scene_plan(
     frames: &[sequence::FramePlan],
     output: &std::path::Path,
     exr: Option<&std::path::Path>,
+    camera_json: Option<&std::path::Path>,
 ) -> Result<()> {
     let mut plan = strata::write_plan::WritePlan::new();
     if let Some(environment) = args.environment.as_ref().filter(|e| e.as_os_str() != "studio") {
@@ -163,7 +203,8 @@ fn check_scene_plan(
             Some(n) => (sequence::numbered(output, n), exr.map(|e| sequence::numbered(e, n))),
             None => (output.to_path_buf(), exr.map(std::path::Path::to_path_buf)),
         };
-        for (role, path) in frame_files(&output, exr.as_deref(), aov_list(args))? {
+        let camera_json = numbered_for(camera_json, frame.number);
+        for (role, path) in frame_files(&output, exr.as_deref(), aov_list(args), camera_json.as_deref())? {
             plan.writes(role, &path)?;
         }
     }
@@ -172,6 +213,11 @@ fn check_scene_plan(
     }
     // Going on from one's own checkpoint is what --checkpoint does.
     plan.check(&|a, b| matches!((a, b), ("--checkpoint", "--resume") | ("--resume", "--checkpoint")))
+}
+
+/// A frame's file: `path` numbered as the frame is (None: a single frame keeps its name).
+fn numbered_for(path: Option<&std::path::Path>, number: Option<u32>) -> Option<std::path::PathBuf> {
+    path.map(|p| number.map_or_else(|| p.to_path_buf(), |n| sequence::numbered(p, n)))
 }
 
 /// What one scene renders, once loaded and checked: its settings and camera framing, the frames of this shard,
@@ -187,6 +233,7 @@ struct SceneJob {
     part_plan: Option<FramePart>,
     output: std::path::PathBuf,
     exr_output: Option<std::path::PathBuf>,
+    camera_json: Option<std::path::PathBuf>,
 }
 
 /// Loads a scene and lays the command line over it (defaults, then the scene file, then the command line);
@@ -241,12 +288,13 @@ fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Opti
         return Ok(None);
     }
     // What the run writes, reads and removes, as files, before anything is read from a checkpoint or rendered.
-    check_scene_plan(args, &plans, &output, exr_output.as_deref())?;
+    let camera_json = camera_json_for(args, scene_path)?;
+    check_scene_plan(args, &plans, &output, exr_output.as_deref(), camera_json.as_deref())?;
     let part_plan = if one_frame && !args.preview { FramePart::of(args, settings.spp, &output)? } else { None };
     if part_plan.as_ref().is_some_and(FramePart::is_empty) {
         return Ok(None);
     }
-    Ok(Some(SceneJob { scene, settings, framing, lens, plans, part_plan, output, exr_output }))
+    Ok(Some(SceneJob { scene, settings, framing, lens, plans, part_plan, output, exr_output, camera_json }))
 }
 
 /// One scene: load, frame, render its frame or frames, write them. A single frame is written once the device's
@@ -314,8 +362,9 @@ fn render_scene(
         };
         let aovs = match &args.aov {
             Some(list) => {
-                let (width, height) = (job.settings.width, job.settings.height);
-                strata::render_aovs(gpu, &job.scene, &on_gpu, width, height, &list.0)?
+                let size = (job.settings.width, job.settings.height);
+                // Motion looks one frame ahead: 1 / --fps.
+                strata::render_aovs(&gpu.device, &job.scene, &on_gpu, size, &list.0, 1.0 / args.fps)?
             }
             None => Vec::new(),
         };
@@ -337,6 +386,9 @@ fn render_scene(
                 Some(part) => strata::partial::file::write_part(&output, part)?,
                 None => write_picture(&output, exr.as_deref(), &picture, &aovs)?,
             }
+            if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
+                write_camera_json(&path, &camera_metadata(&job, &picture))?;
+            }
             if let Some(plan) = &job.part_plan {
                 plan.finish()?;
             }
@@ -345,6 +397,9 @@ fn render_scene(
             return Ok(());
         }
         write_picture(&output, exr.as_deref(), &picture, &aovs)?;
+        if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
+            write_camera_json(&path, &camera_metadata(&job, &picture))?;
+        }
         finished.push(output.display().to_string());
         report(args, &job.settings, &job.scene, &picture, written);
     }

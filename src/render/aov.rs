@@ -23,11 +23,40 @@ pub enum Aov {
     Emission,
     /// Metallic, roughness, transmission, (ior − 1)/3.
     Material,
+    /// The glTF node index + 1 of the surface each pixel's centre sees (0: nothing), exact per pixel (one
+    /// sample at the pixel centre, not a mean); as a float, exact below 2^24.
+    Instance,
+    /// Forward flow in pixels (x right, y down) of the surface point each pixel's centre sees, from this frame's
+    /// time to one frame later (the scene's animation, motion and camera); 0 on the background.
+    Motion,
+}
+
+/// What the AOVs that follow the scene rather than the G-buffer need: which node drew each instance, and where
+/// every instance and the camera are now and one frame later.
+pub struct AovScene {
+    /// Per instance: its glTF node index + 1 (0 for an instance without a node).
+    pub instance_labels: Vec<u32>,
+    /// Per instance: its world transform at this frame's time and one frame later.
+    pub now: Vec<glam::Mat4>,
+    pub next: Vec<glam::Mat4>,
+    /// The pixel-centre camera now and one frame later.
+    pub camera_now: crate::math::lens::CameraSample,
+    pub camera_next: crate::math::lens::CameraSample,
 }
 
 impl Aov {
-    pub const NAMES: [&'static str; 8] =
-        ["normal", "geometric-normal", "albedo", "depth", "height", "position", "emission", "material"];
+    pub const NAMES: [&'static str; 10] = [
+        "normal",
+        "geometric-normal",
+        "albedo",
+        "depth",
+        "height",
+        "position",
+        "emission",
+        "material",
+        "instance",
+        "motion",
+    ];
 
     pub fn parse_list(text: &str) -> Result<Vec<Aov>> {
         let mut list = Vec::new();
@@ -41,6 +70,8 @@ impl Aov {
                 "position" => Aov::Position,
                 "emission" => Aov::Emission,
                 "material" => Aov::Material,
+                "instance" => Aov::Instance,
+                "motion" => Aov::Motion,
                 other => bail!("unknown AOV \"{other}\" (one of: {})", Aov::NAMES.join(", ")),
             };
             if !list.contains(&aov) {
@@ -63,13 +94,26 @@ impl Aov {
     }
 
     /// The raw values (what an EXR layer holds); alpha is 1 where a surface was drawn, 0 elsewhere.
-    pub fn extract(self, g: &GBufferFrame) -> Result<Frame> {
+    pub fn extract(self, g: &GBufferFrame, scene: &AovScene) -> Result<Frame> {
         let pixels = (0..g.width * g.height)
             .map(|i| {
                 let (x, y) = (i % g.width, i / g.width);
                 let covered = if g.covered(x, y) { 1.0 } else { 0.0 };
                 let px = |c: usize| g.at(c, x, y);
+                // The instance the pixel's centre sees (ids hold instance + 1).
+                let instance = g.ids[i as usize][0].checked_sub(1).map(|k| k as usize);
                 match self {
+                    Aov::Instance => {
+                        let label = instance.and_then(|k| scene.instance_labels.get(k)).copied().unwrap_or(0) as f32;
+                        [label, label, label, covered]
+                    }
+                    Aov::Motion => match instance {
+                        Some(k) => {
+                            let [fx, fy] = flow(scene, k, glam::Vec4::from(px(POSITION)).truncate(), g.width, g.height);
+                            [fx, fy, 0.0, covered]
+                        }
+                        None => [0.0, 0.0, 0.0, 0.0],
+                    },
                     Aov::Normal => with_alpha(px(SHADING_NORMAL), covered),
                     Aov::GeometricNormal => with_alpha(px(GEOMETRIC_NORMAL), covered),
                     Aov::Albedo => with_alpha(px(ALBEDO), covered),
@@ -90,6 +134,7 @@ impl Aov {
         let covered: Vec<&[f32; 4]> = raw.pixels.iter().filter(|p| p[3] > 0.0).collect();
         let (lo, hi) = covered.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
         let span = if hi > lo { hi - lo } else { 1.0 };
+        let largest_flow = raw.pixels.iter().map(|p| p[0].abs().max(p[1].abs())).fold(1e-6f32, f32::max);
         let pixels = raw
             .pixels
             .iter()
@@ -106,11 +151,40 @@ impl Aov {
                         [v, v, v, 1.0]
                     }
                     Aov::Depth | Aov::Height => [0.0, 0.0, 0.0, 1.0],
+                    // Labels as distinct colours (a hash of the label), nothing black.
+                    Aov::Instance if p[0] > 0.0 => {
+                        let h = (p[0] as u32).wrapping_mul(0x9e37_79b9);
+                        let c = |shift: u32| 0.25 + 0.75 * ((h >> shift) & 0xff) as f32 / 255.0;
+                        [c(8), c(16), c(24), 1.0]
+                    }
+                    Aov::Instance => [0.0, 0.0, 0.0, 1.0],
+                    // Flow as a colour: grey is still, red/green the x/y components up to the frame's largest.
+                    Aov::Motion => [0.5 + 0.5 * p[0] / largest_flow, 0.5 + 0.5 * p[1] / largest_flow, 0.5, 1.0],
                     _ => [p[0], p[1], p[2], 1.0],
                 }
             })
             .collect();
         Frame { width: raw.width, height: raw.height, pixels }
+    }
+}
+
+/// Where `world`, a point of instance `k` seen now, is one frame later, minus where it is now, in pixels: the
+/// point rides on its instance's transform (object space is where it stays put) and each end is projected by
+/// its own camera.
+fn flow(scene: &AovScene, k: usize, world: glam::Vec3, width: u32, height: u32) -> [f32; 2] {
+    use crate::math::lens::project_to_pixel;
+    let (Some(now), Some(next)) = (scene.now.get(k), scene.next.get(k)) else { return [0.0; 2] };
+    if now.determinant().abs() < 1e-20 {
+        return [0.0; 2];
+    }
+    let later = *next * now.inverse();
+    let moved = later.transform_point3(world);
+    let f = project_to_pixel(&scene.camera_next, moved, width, height)
+        - project_to_pixel(&scene.camera_now, world, width, height);
+    if f.is_finite() {
+        f.to_array()
+    } else {
+        [0.0; 2]
     }
 }
 

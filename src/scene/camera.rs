@@ -200,3 +200,67 @@ mod tests {
         assert!((m.inverse().transform_point3(Vec3::ZERO).z + 14f32.sqrt()).abs() < 1e-5);
     }
 }
+
+/// What a frame's camera was, for whoever reads the frame as data (`strata render --camera-json`): the image
+/// size, the pinhole intrinsics and the pose, in the terms dataset tools use.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraMetadata {
+    pub width: u32,
+    pub height: u32,
+    pub camera: Camera,
+    /// The frame's time in seconds (the shutter's opening).
+    pub time: f32,
+    /// The exposure the display image was made with, in stops.
+    pub exposure: f32,
+}
+
+impl CameraMetadata {
+    /// The intrinsics matrix K (pixels; OpenCV's convention: x right, y down, z forward, pixel centres at +½) of a
+    /// perspective camera: u = fx·x/z + cx. strata keeps the vertical field of view and fits the horizontal one to
+    /// the image, so pixels are square. None for an orthographic camera.
+    pub fn intrinsics(&self) -> Option<[[f32; 3]; 3]> {
+        let Projection::Perspective { yfov, .. } = self.camera.projection else { return None };
+        let f = 0.5 * self.height as f32 / (0.5 * yfov).tan();
+        let (cx, cy) = (0.5 * self.width as f32, 0.5 * self.height as f32);
+        Some([[f, 0.0, cx], [0.0, f, cy], [0.0, 0.0, 1.0]])
+    }
+
+    /// The camera as JSON: `width`, `height`, `K` (rows; null when orthographic), `yfov` (radians, as glTF
+    /// has it) or `xmag`/`ymag`, `world_from_camera` (4x4 rows, glTF's camera axes: +X right, +Y up, looking
+    /// down −Z), `camera_from_world_opencv` (the same pose for K: +Y down, +Z forward), `near`, `far` (null:
+    /// infinite), `time`, `exposure`, `aperture_radius` and `focus_distance`.
+    pub fn to_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        let rows = |m: Mat4| (0..4).map(|r| m.row(r).to_array()).collect::<Vec<_>>();
+        let opencv_from_gltf = Mat4::from_diagonal(Vec4::new(1.0, -1.0, -1.0, 1.0));
+        let mut value = json!({
+            "width": self.width,
+            "height": self.height,
+            "K": self.intrinsics(),
+            "world_from_camera": rows(self.camera.world_from_camera),
+            "camera_from_world_opencv": rows(opencv_from_gltf * self.camera.world_from_camera.inverse()),
+            "time": self.time,
+            "exposure": self.exposure,
+            "aperture_radius": self.camera.lens.aperture_radius,
+            "focus_distance": self.camera.lens.focus_distance,
+        });
+        match self.camera.projection {
+            Projection::Perspective { yfov, znear, zfar } => {
+                value["projection"] = json!("perspective");
+                value["yfov"] = json!(yfov);
+                value["near"] = json!(znear);
+                value["far"] = json!(zfar);
+            }
+            Projection::Orthographic { xmag, ymag, znear, zfar } => {
+                // The image keeps ymag; its horizontal extent follows its aspect (clip_from_view).
+                value["projection"] = json!("orthographic");
+                value["xmag"] = json!(ymag * self.width as f32 / self.height as f32);
+                value["ymag"] = json!(ymag);
+                value["glTF_xmag"] = json!(xmag);
+                value["near"] = json!(znear);
+                value["far"] = json!(zfar);
+            }
+        }
+        value
+    }
+}
