@@ -101,8 +101,11 @@ pub fn render_aovs(
     let sample = pinhole_at(now);
     let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
     let labels = scene.instances.iter().map(|i| i.node.map_or(0, |n| n as u32 + 1)).collect();
+    let node_categories = scene.node_categories();
+    let categories = scene.instances.iter().map(|i| i.node.and_then(|n| node_categories.get(n)).copied().unwrap_or(0));
     let aov_scene = render::aov::AovScene {
         instance_labels: labels,
+        categories: categories.collect(),
         next: scene.instance_transforms_at(next),
         now: transforms,
         camera_now: sample,

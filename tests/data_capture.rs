@@ -19,13 +19,14 @@ fn pixel_of(x: f32, z: f32) -> (u32, u32) {
     (((x + 1.0) * PIXELS_PER_METRE) as u32, ((z + 1.0) * PIXELS_PER_METRE) as u32)
 }
 
-/// Three 0.5 m quads centred at x = −0.6, 0 and 0.6; returns the scene and their nodes.
+/// Three 0.5 m quads, "left", "middle" and "right", centred at x = −0.6, 0 and 0.6; returns the scene and their
+/// nodes.
 fn row_of_quads() -> (Scene, [usize; 3]) {
     let mut scene = Scene::default();
     let grey = lambertian(&mut scene, 0.5);
-    let nodes = [-0.6f32, 0.0, 0.6].map(|x| {
+    let nodes = [("left", -0.6f32), ("middle", 0.0), ("right", 0.6)].map(|(name, x)| {
         let (p, m) = plane_at(Vec2::splat(0.5), Vec3::new(x, 0.0, 0.0), false, grey);
-        place(&mut scene, "quad", p, m)
+        place(&mut scene, name, p, m)
     });
     scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, 1.0));
     scene.add_default_light();
@@ -193,4 +194,50 @@ fn camera_json_reprojects_what_each_pixel_sees_onto_it() {
         png.to_str().unwrap(),
     ]);
     assert!(!run.status.success() && outcome(&run).contains("must end in .json"), "{}", outcome(&run));
+}
+
+/// `--aov semantic`: each node's class comes from its glTF `extras.category_id` or a scene file's `[[semantic]]`
+/// table (patterns with `*` and `?`; the later table wins), a node without one takes its nearest ancestor's, and
+/// each pixel shows the class of the node it sees; a pattern that matches no node is an error naming the file
+/// and line.
+#[test]
+fn semantic_classes_come_from_node_extras_and_scene_file_patterns() {
+    let gpu = GpuTest::new();
+    let dir = temp_dir("semantic");
+    let (row, _) = row_of_quads();
+    let (text, bin) = strata::scene::gltf_export::to_gltf(&row, "row.bin").unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let left = doc["nodes"].as_array().unwrap().iter().position(|n| n["name"] == "left").unwrap();
+    doc["nodes"][left]["extras"] = serde_json::json!({"category_id": 5});
+    std::fs::write(dir.join("row.gltf"), serde_json::to_vec(&doc).unwrap()).unwrap();
+    std::fs::write(dir.join("row.bin"), bin).unwrap();
+    let toml = dir.join("row.toml");
+    let tables = "[[semantic]]\nnodes = \"*i*\"\ncategory_id = 3\n[[semantic]]\nnodes = \"mid*\"\ncategory_id = 7\n";
+    std::fs::write(&toml, format!("gltf = \"row.gltf\"\n{tables}")).unwrap();
+    let loaded = strata::load(&toml, &Default::default()).unwrap().scene;
+    let class_of = |name: &str| loaded.nodes.iter().find(|n| n.name == name).and_then(|n| n.category);
+    // "*i*" matches middle and right; "mid*" then gives middle its own; left keeps its extras.
+    assert_eq!([class_of("left"), class_of("middle"), class_of("right")], [Some(5), Some(7), Some(3)]);
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &loaded).unwrap();
+    let frames =
+        strata::render_aovs(gpu.device(), &loaded, &on_gpu, (SIZE, SIZE), &[Aov::Semantic], 1.0 / FPS).unwrap();
+    let semantic = &frames[0].1;
+    for (x, class) in [(-0.6f32, 5.0), (0.0, 7.0), (0.6, 3.0)] {
+        let (px, py) = pixel_of(x, 0.0);
+        assert_eq!(semantic.pixel(px, py)[0], class, "the quad at x = {x}");
+    }
+    assert_eq!(semantic.pixel(0, 0), [0.0; 4], "the background is unlabelled");
+    drop(on_gpu);
+
+    // A child without a class of its own takes its parent's.
+    let (mut family, nodes) = row_of_quads();
+    family.nodes[nodes[0]].category = Some(11);
+    family.nodes[nodes[1]].parent = Some(nodes[0]);
+    family.nodes[nodes[0]].children.push(nodes[1]);
+    assert_eq!(family.node_categories(), vec![11, 11, 0]);
+
+    std::fs::write(&toml, "gltf = \"row.gltf\"\n[[semantic]]\nnodes = \"wheel*\"\ncategory_id = 2\n").unwrap();
+    let error = format!("{:#}", strata::load(&toml, &Default::default()).unwrap_err());
+    assert!(error.contains("row.toml:3:9") && error.contains("no node name matches \"wheel*\""), "{error}");
+    gpu.finish().unwrap();
 }

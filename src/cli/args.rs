@@ -224,7 +224,8 @@ pub struct RenderArgs {
     pub environment_intensity: Option<f32>,
     /// Also write G-buffer channels (comma-separated): normal, geometric-normal, albedo, depth, height, position,
     /// emission, material; and the labels a dataset needs: instance (the glTF node index + 1 each pixel's centre
-    /// sees, 0 for nothing) and motion (forward flow in pixels to one frame, 1/--fps, later). With an .exr they
+    /// sees, 0 for nothing), semantic (its node's class: extras.category_id or the scene file's [[semantic]]) and
+    /// motion (forward flow in pixels to one frame, 1/--fps, later). With an .exr they
     /// are layers of the EXR (raw values); with -o x.png each is a PNG beside it, x.<name>.png (normals as ½+½n,
     /// depth and height scaled to their range, labels as colours). docs/outputs.md says what each holds.
     #[arg(long, value_name = "LIST", value_parser = parse_aovs)]

@@ -26,6 +26,9 @@ pub enum Aov {
     /// The glTF node index + 1 of the surface each pixel's centre sees (0: nothing), exact per pixel (one
     /// sample at the pixel centre, not a mean); as a float, exact below 2^24.
     Instance,
+    /// The semantic class of the surface each pixel's centre sees (its node's `category`, inherited from its
+    /// ancestors; 0: unlabelled or nothing), exact per pixel.
+    Semantic,
     /// Forward flow in pixels (x right, y down) of the surface point each pixel's centre sees, from this frame's
     /// time to one frame later (the scene's animation, motion and camera); 0 on the background.
     Motion,
@@ -36,6 +39,8 @@ pub enum Aov {
 pub struct AovScene {
     /// Per instance: its glTF node index + 1 (0 for an instance without a node).
     pub instance_labels: Vec<u32>,
+    /// Per instance: its node's semantic class (0: none).
+    pub categories: Vec<u32>,
     /// Per instance: its world transform at this frame's time and one frame later.
     pub now: Vec<glam::Mat4>,
     pub next: Vec<glam::Mat4>,
@@ -45,7 +50,7 @@ pub struct AovScene {
 }
 
 impl Aov {
-    pub const NAMES: [&'static str; 10] = [
+    pub const NAMES: [&'static str; 11] = [
         "normal",
         "geometric-normal",
         "albedo",
@@ -55,6 +60,7 @@ impl Aov {
         "emission",
         "material",
         "instance",
+        "semantic",
         "motion",
     ];
 
@@ -71,6 +77,7 @@ impl Aov {
                 "emission" => Aov::Emission,
                 "material" => Aov::Material,
                 "instance" => Aov::Instance,
+                "semantic" => Aov::Semantic,
                 "motion" => Aov::Motion,
                 other => bail!("unknown AOV \"{other}\" (one of: {})", Aov::NAMES.join(", ")),
             };
@@ -103,8 +110,9 @@ impl Aov {
                 // The instance the pixel's centre sees (ids hold instance + 1).
                 let instance = g.ids[i as usize][0].checked_sub(1).map(|k| k as usize);
                 match self {
-                    Aov::Instance => {
-                        let label = instance.and_then(|k| scene.instance_labels.get(k)).copied().unwrap_or(0) as f32;
+                    Aov::Instance | Aov::Semantic => {
+                        let labels = if self == Aov::Instance { &scene.instance_labels } else { &scene.categories };
+                        let label = instance.and_then(|k| labels.get(k)).copied().unwrap_or(0) as f32;
                         [label, label, label, covered]
                     }
                     Aov::Motion => match instance {
@@ -152,12 +160,12 @@ impl Aov {
                     }
                     Aov::Depth | Aov::Height => [0.0, 0.0, 0.0, 1.0],
                     // Labels as distinct colours (a hash of the label), nothing black.
-                    Aov::Instance if p[0] > 0.0 => {
+                    Aov::Instance | Aov::Semantic if p[0] > 0.0 => {
                         let h = (p[0] as u32).wrapping_mul(0x9e37_79b9);
                         let c = |shift: u32| 0.25 + 0.75 * ((h >> shift) & 0xff) as f32 / 255.0;
                         [c(8), c(16), c(24), 1.0]
                     }
-                    Aov::Instance => [0.0, 0.0, 0.0, 1.0],
+                    Aov::Instance | Aov::Semantic => [0.0, 0.0, 0.0, 1.0],
                     // Flow as a colour: grey is still, red/green the x/y components up to the frame's largest.
                     Aov::Motion => [0.5 + 0.5 * p[0] / largest_flow, 0.5 + 0.5 * p[1] / largest_flow, 0.5, 1.0],
                     _ => [p[0], p[1], p[2], 1.0],

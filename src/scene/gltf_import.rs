@@ -299,6 +299,13 @@ fn node_transform(node: &gltf::Node<'_>) -> NodeTransform {
     }
 }
 
+/// A node's semantic class from its `extras.category_id` (the name BOP and BlenderProc give it): a whole number
+/// from 0 up, else none.
+fn category_of(node: &gltf::Node<'_>) -> Option<u32> {
+    let extras: serde_json::Value = serde_json::from_str(node.extras().as_ref()?.get()).ok()?;
+    extras.get("category_id")?.as_u64().and_then(|c| u32::try_from(c).ok())
+}
+
 /// `node_meshes`: the mesh each node draws (meshes_at_node_weights).
 fn import_nodes(
     document: &gltf::Document,
@@ -316,6 +323,7 @@ fn import_nodes(
             mesh: node_meshes.get(n.index()).copied().flatten(),
             camera: None,
             light: None,
+            category: category_of(&n),
         })
         .collect();
     link_parents(scene)?;

@@ -33,6 +33,7 @@ pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from
         mesh: Some(mesh),
         camera: None,
         light: None,
+        category: None,
     });
     scene.roots.push(node);
     let node_from_object = Mat4::IDENTITY;

@@ -102,6 +102,9 @@ pub struct Node {
     pub mesh: Option<usize>,
     pub camera: Option<usize>,
     pub light: Option<usize>,
+    /// Its semantic class (`--aov semantic`): the glTF node's `extras.category_id`, or what a scene file's
+    /// `[[semantic]]` table gives it; None: its parent's.
+    pub category: Option<u32>,
 }
 
 /// A mesh placed in the world by a node (at the rest pose, without animation).
@@ -167,6 +170,25 @@ impl Scene {
 
     pub fn triangle_count(&self) -> usize {
         self.instances.iter().flat_map(|i| self.meshes[i.mesh].primitives.iter()).map(Primitive::triangle_count).sum()
+    }
+
+    /// Each node's semantic class: its own `category`, else its nearest ancestor's, else 0 (unlabelled).
+    pub fn node_categories(&self) -> Vec<u32> {
+        (0..self.nodes.len())
+            .map(|mut i| {
+                // At most as many steps as there are nodes (the hierarchy is acyclic).
+                for _ in 0..self.nodes.len() {
+                    if let Some(c) = self.nodes[i].category {
+                        return c;
+                    }
+                    match self.nodes[i].parent {
+                        Some(p) => i = p,
+                        None => break,
+                    }
+                }
+                0
+            })
+            .collect()
     }
 
     /// The scene's camera, or one that frames its bounds (looking down −Z from slightly above).

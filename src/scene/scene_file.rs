@@ -32,6 +32,8 @@ struct FileRoot {
     bumps: Vec<BumpSection>,
     #[serde(default, rename = "motion")]
     motions: Vec<MotionSection>,
+    #[serde(default, rename = "semantic")]
+    semantics: Vec<SemanticSection>,
     render: Option<RenderSection>,
     environment: Option<EnvironmentSection>,
 }
@@ -92,6 +94,14 @@ struct BumpSection {
     gain: Option<S<f32>>,
     derivative: Option<S<String>>,
     epsilon: Option<S<f32>>,
+}
+
+/// A semantic class for the nodes whose names match a pattern (`*` any run of characters, `?` one).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SemanticSection {
+    nodes: S<String>,
+    category_id: S<i64>,
 }
 
 #[derive(Deserialize)]
@@ -270,6 +280,7 @@ fn apply(source: &Source<'_>, root: &FileRoot, scene: &mut Scene) -> Result<()> 
     if let Some(e) = &root.environment {
         scene.environment = Some(environment(source, e)?);
     }
+    apply_semantics(source, &root.semantics, scene)?;
     for m in &root.motions {
         let name = m.node.get_ref();
         let matches: Vec<usize> =
@@ -713,4 +724,73 @@ fn render_settings(source: &Source<'_>, r: &RenderSection, dir: &Path) -> Result
         trace,
         output: r.output.as_ref().map(|o| dir.join(o)),
     })
+}
+
+/// `[[semantic]]` tables, in file order (a later table wins over an earlier one and over the glTF's extras): each
+/// gives its category to every node whose name matches its pattern; a pattern that matches nothing is an error.
+fn apply_semantics(source: &Source<'_>, tables: &[SemanticSection], scene: &mut Scene) -> Result<()> {
+    for table in tables {
+        let id = *table.category_id.get_ref();
+        let Ok(id) = u32::try_from(id) else {
+            return Err(source.error(table.category_id.span(), format!("category_id = {id} must be 0 to {}", u32::MAX)));
+        };
+        let pattern = table.nodes.get_ref();
+        let mut matched = false;
+        for node in scene.nodes.iter_mut().filter(|n| glob_matches(pattern, &n.name)) {
+            node.category = Some(id);
+            matched = true;
+        }
+        if !matched {
+            let names = list(scene.nodes.iter().map(|n| &n.name));
+            return Err(source.error(table.nodes.span(), format!("no node name matches \"{pattern}\"; nodes: {names}")));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `name` matches `pattern`, where `*` stands for any run of characters and `?` for one.
+pub fn glob_matches(pattern: &str, name: &str) -> bool {
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    // The classic two-pointer match with one backtrack point for the last `*`.
+    let (mut i, mut j, mut star, mut mark) = (0, 0, None, 0);
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || p[i] == n[j]) {
+            i += 1;
+            j += 1;
+        } else if i < p.len() && p[i] == '*' {
+            star = Some(i);
+            mark = j;
+            i += 1;
+        } else if let Some(s) = star {
+            i = s + 1;
+            mark += 1;
+            j = mark;
+        } else {
+            return false;
+        }
+    }
+    p[i..].iter().all(|&c| c == '*')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glob_matches;
+
+    #[test]
+    fn glob_patterns_match_runs_and_single_characters() {
+        for (pattern, name, matches) in [
+            ("wheel*", "wheel_front_left", true),
+            ("wheel*", "steering wheel", false),
+            ("*wheel*", "steering wheel", true),
+            ("r?ght", "right", true),
+            ("r?ght", "rght", false),
+            ("*", "", true),
+            ("a*b*c", "aXXbYYc", true),
+            ("a*b*c", "aXXbYY", false),
+            ("exact", "exact", true),
+            ("exact", "exactly", false),
+        ] {
+            assert_eq!(glob_matches(pattern, name), matches, "{pattern:?} against {name:?}");
+        }
+    }
 }
