@@ -8,6 +8,9 @@
 #     them; bookworm-backports has 25.x)
 #   - libshaderc-dev, glslang-dev, spirv-tools (static archives the build links; see build/shaderc-link)
 #   - pkg-config, a C/C++ toolchain (the shaderc crate builds a small C++ shim)
+#   - with --denoiser: Intel Open Image Denoise for `strata render --denoise`, unpacked from the PyPI wheel pyoidn
+#     (pinned, checksum verified) into /opt/strata/oidn/lib; there is no Debian package. strata loads it at run
+#     time, so builds and tests without it stay green.
 # It never names a mirror: the backports suite is added on the URI the machine's own apt sources already use.
 set -euo pipefail
 
@@ -27,10 +30,45 @@ base_pkgs=(libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
            libshaderc-dev glslang-dev glslang-tools spirv-tools
            pkg-config build-essential ca-certificates)
 runtime_only=
-if [ "${1:-}" = --runtime ]; then
-  runtime_only=1
-  base_pkgs=(libvulkan1 vulkan-validationlayers vulkan-tools ca-certificates)
-fi
+denoiser=
+for arg in "$@"; do
+  case "$arg" in
+    --runtime)
+      runtime_only=1
+      base_pkgs=(libvulkan1 vulkan-validationlayers vulkan-tools ca-certificates);;
+    --denoiser) denoiser=1;;
+    *) echo "setup.sh: unknown option $arg (--runtime, --denoiser)" >&2; exit 2;;
+  esac
+done
+
+# Open Image Denoise from the pyoidn wheel: its CPU device, core and TBB libraries, nothing of Python's.
+OIDN_DIR=/opt/strata/oidn/lib
+OIDN_WHEEL=pyoidn-2.5.1.0-py3-none-manylinux2014_x86_64.whl
+OIDN_SHA256=32ad13368f8de1ef63001942ad05b02a00cd732d1206d97f352d3a3f606d823e
+install_denoiser() {
+  if [ -e "$OIDN_DIR/libOpenImageDenoise.so.2" ] && [ -e "$OIDN_DIR/libOpenImageDenoise_device_cpu.so.2.5.1" ]; then
+    echo "setup: Open Image Denoise: $OIDN_DIR (already there)"
+    return
+  fi
+  apt-get install -y -qq --no-install-recommends python3 python3-pip
+  local tmp
+  tmp=$(mktemp -d)
+  python3 -m pip download --quiet --no-deps --only-binary=:all: --dest "$tmp" "pyoidn==2.5.1.0"
+  echo "$OIDN_SHA256  $tmp/$OIDN_WHEEL" | sha256sum --check --quiet
+  mkdir -p "$OIDN_DIR"
+  python3 - "$tmp/$OIDN_WHEEL" "$OIDN_DIR" <<'PY'
+import os, re, sys, zipfile
+wheel, out = sys.argv[1], sys.argv[2]
+keep = re.compile(r"^pyoidn/oidn/lib/(libOpenImageDenoise(\.so.*|_core\.so.*|_device_cpu\.so.*)|libtbb\.so.*)$")
+with zipfile.ZipFile(wheel) as z:
+    for entry in z.infolist():
+        if keep.match(entry.filename):
+            with z.open(entry) as src, open(os.path.join(out, os.path.basename(entry.filename)), "wb") as dst:
+                dst.write(src.read())
+PY
+  rm -rf "$tmp"
+  echo "setup: Open Image Denoise: $OIDN_DIR"
+}
 
 have_ray_query() {
   command -v vulkaninfo >/dev/null || return 1
@@ -108,5 +146,8 @@ elif command -v cargo >/dev/null; then
   echo "setup: cargo:             $(cargo --version)"
 else
   echo "setup: note: no cargo on PATH; install Rust 1.85 or newer (rustup) to build strata" >&2
+fi
+if [ -n "$denoiser" ]; then
+  install_denoiser
 fi
 echo "setup: OK"

@@ -2,6 +2,7 @@
 //! {`vk/`, `scene/`, `output`}; nothing on a lower floor imports a higher one.
 pub mod bench;
 pub mod check;
+pub mod denoise;
 pub mod fatal_signals;
 pub mod hash;
 pub mod input;
@@ -112,6 +113,47 @@ pub fn render_aovs(
         camera_next: pinhole_at(next),
     };
     aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame, &aov_scene)?))).collect()
+}
+
+/// The denoiser's guides (the first-hit albedo and shading normal), anti-aliased as the picture is: the mean of
+/// G-buffer passes through a 4×4 grid of sub-pixel points with a pinhole at the shutter's opening. Open Image
+/// Denoise asks for guides filtered like the colour; one pass through pixel centres would leave hard edges where
+/// the picture's are soft.
+pub fn denoise_guides(
+    device: &std::sync::Arc<vk::Device>,
+    scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
+    (width, height): (u32, u32),
+) -> Result<(output::Frame, output::Frame)> {
+    use render::gbuffer_layout::{ALBEDO, SHADING_NORMAL};
+    const GRID: u32 = 4;
+    let pass = render::gbuffer::GBufferPass::new(device)?;
+    let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
+    let transforms = scene.instance_transforms_at(scene.shutter.0);
+    let materials = pass.materials(scene, &on_gpu.textures)?;
+    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
+    let mut camera = scene.camera_at(scene.shutter.0);
+    camera.lens.aperture_radius = 0.0;
+    let pixels = (width * height) as usize;
+    let (mut albedo, mut normal) = (vec![[0.0f32; 4]; pixels], vec![[0.0f32; 4]; pixels]);
+    let weight = 1.0 / (GRID * GRID) as f32;
+    for k in 0..GRID * GRID {
+        let jitter = glam::Vec2::new((k % GRID) as f32 + 0.5, (k / GRID) as f32 + 0.5) / GRID as f32 - 0.5;
+        let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), jitter);
+        let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
+        for i in 0..pixels {
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            if !frame.covered(x, y) {
+                continue;
+            }
+            let (a, n) = (frame.at(ALBEDO, x, y), frame.at(SHADING_NORMAL, x, y));
+            for c in 0..3 {
+                albedo[i][c] += weight * a[c];
+                normal[i][c] += weight * n[c];
+            }
+        }
+    }
+    Ok((output::Frame::new(width, height, albedo)?, output::Frame::new(width, height, normal)?))
 }
 
 /// Renders `scene` with distributed ray tracing: `settings.spp` samples of G-buffer + accumulation, then the

@@ -66,6 +66,36 @@ pub fn srgb_to_linear(encoded: f32) -> f32 {
     }
 }
 
+/// The display image the resolve pass makes (shaders/resolve.comp), made on the host from a linear frame that
+/// did not come from the sums (a denoised one): exposure 2^stops, the tone map (clamp or Narkowicz's ACES fit),
+/// sRGB; with `transparent`, straight alpha from coverage.
+pub fn display_rgba8(frame: &Frame, exposure_stops: f32, filmic: bool, transparent: bool) -> Vec<u8> {
+    let scale = exposure_stops.exp2();
+    let aces = |x: f32| ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0);
+    let q = |v: f32| (v * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8;
+    frame
+        .pixels
+        .iter()
+        .flat_map(|p| {
+            let alpha = if transparent { p[3].clamp(0.0, 1.0) } else { 1.0 };
+            let unpremultiply = if transparent {
+                if p[3] > 0.0 {
+                    1.0 / p[3]
+                } else {
+                    0.0
+                }
+            } else {
+                1.0
+            };
+            let c = |v: f32| {
+                let x = (v * unpremultiply * scale).max(0.0);
+                q(linear_to_srgb(if filmic { aces(x) } else { x.clamp(0.0, 1.0) }))
+            };
+            [c(p[0]), c(p[1]), c(p[2]), q(alpha)]
+        })
+        .collect()
+}
+
 /// 8-bit sRGB RGBA bytes of a linear frame (colour clamped to [0, 1] and encoded; alpha linear).
 pub fn to_srgb8(frame: &Frame) -> Vec<u8> {
     frame

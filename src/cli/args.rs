@@ -124,6 +124,11 @@ pub struct RenderArgs {
     /// Also write the linear radiance to this OpenEXR file (with the --aov layers, if any).
     #[arg(long, value_name = "FILE")]
     pub exr: Option<PathBuf>,
+    /// Denoise the picture with Intel Open Image Denoise, guided by the first-hit albedo and normal: -o gets the
+    /// denoised image, an --exr keeps the noisy one as its `noisy` layer. The library is loaded at run time:
+    /// `scripts/setup.sh --denoiser` installs it (from the pyoidn wheel).
+    #[arg(long, conflicts_with = "preview")]
+    pub denoise: bool,
     /// Also write each frame's camera to this JSON file: the image size, the intrinsics K (pixels, OpenCV's axes),
     /// yfov (radians, as glTF), world_from_camera (glTF's axes) and the OpenCV-axes pose, near/far, the frame's
     /// time and exposure. Numbered per frame as -o is (a run of # sets the digits); {name} as in -o.

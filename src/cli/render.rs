@@ -310,6 +310,15 @@ fn render_scene(
     let Some(mut job) = prepare_scene(args, scene_path)? else {
         return Ok(());
     };
+    // The denoiser loads before any work, so that a missing library costs nothing.
+    let denoiser = if args.denoise {
+        if job.part_plan.as_ref().is_some_and(|p| p.writes_part) {
+            bail!("--denoise works on whole frames, not on a part of one's samples (--samples, --shard)");
+        }
+        Some(strata::denoise::Denoiser::load()?)
+    } else {
+        None
+    };
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         let trace = if several { args.trace.unwrap_or_default() } else { job.settings.trace };
@@ -368,6 +377,11 @@ fn render_scene(
             }
             None => Vec::new(),
         };
+        let mut picture = picture;
+        let noisy = match (&denoiser, &mut picture) {
+            (Some(denoiser), Picture::Rendered(rendered)) => Some(denoise(denoiser, gpu, &job, &on_gpu, rendered)?),
+            _ => None,
+        };
         // What the layer said so far; teardown messages are checked once the device is gone.
         check_log()?;
         let device_name = gpu.device.report.name.clone();
@@ -384,7 +398,7 @@ fn render_scene(
             check_log()?;
             match &part {
                 Some(part) => strata::partial::file::write_part(&output, part)?,
-                None => write_picture(&output, exr.as_deref(), &picture, &aovs)?,
+                None => write_picture(&output, exr.as_deref(), &picture, &aovs, noisy.as_ref())?,
             }
             if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
                 write_camera_json(&path, &camera_metadata(&job, &picture))?;
@@ -396,7 +410,7 @@ fn render_scene(
             report(args, &job.settings, &job.scene, &picture, FrameReport { part, ..written });
             return Ok(());
         }
-        write_picture(&output, exr.as_deref(), &picture, &aovs)?;
+        write_picture(&output, exr.as_deref(), &picture, &aovs, noisy.as_ref())?;
         if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
             write_camera_json(&path, &camera_metadata(&job, &picture))?;
         }
@@ -690,11 +704,11 @@ fn write_picture(
     exr: Option<&std::path::Path>,
     picture: &Picture,
     aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
+    noisy: Option<&strata::output::Frame>,
 ) -> Result<()> {
-    let mut staged = stage_outputs(output, picture, aovs)?;
+    let mut staged = stage_outputs(output, picture, aovs, noisy)?;
     if let Some(exr) = exr {
-        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        staged.push(strata::output::stage_frame_with_layers(exr, picture.linear(), &layers)?);
+        staged.push(strata::output::stage_frame_with_layers(exr, picture.linear(), &exr_layers(aovs, noisy))?);
     }
     for file in staged {
         let path = file.path().to_path_buf();
@@ -704,6 +718,36 @@ fn write_picture(
         }
     }
     Ok(())
+}
+
+/// An EXR's extra layers: the AOVs, and the noisy picture when the beauty is denoised.
+fn exr_layers<'a>(
+    aovs: &'a [(strata::render::aov::Aov, strata::output::Frame)],
+    noisy: Option<&'a strata::output::Frame>,
+) -> Vec<(&'a str, &'a strata::output::Frame)> {
+    let mut layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
+    layers.extend(noisy.map(|f| ("noisy", f)));
+    layers
+}
+
+/// Denoises a rendered frame in place (its linear radiance and its display image, made as the resolve makes it)
+/// with the albedo and normal a pixel-centre G-buffer pass sees; returns the noisy radiance.
+fn denoise(
+    denoiser: &strata::denoise::Denoiser,
+    gpu: &Gpu,
+    job: &SceneJob,
+    on_gpu: &strata::render::SceneOnGpu,
+    rendered: &mut strata::render::frame::RenderedFrame,
+) -> Result<strata::output::Frame> {
+    let settings = &job.settings;
+    let size = (settings.width, settings.height);
+    let (albedo, normal) = strata::denoise_guides(&gpu.device, &job.scene, on_gpu, size)?;
+    let denoised = denoiser.denoise(&rendered.linear, &albedo, &normal)?;
+    let filmic = settings.tone_map == strata::scene::settings::ToneMap::Filmic;
+    let transparent =
+        settings.backdrop_for(job.scene.environment.is_some()) == strata::scene::settings::Backdrop::Transparent;
+    rendered.display = strata::output::display_rgba8(&denoised, rendered.exposure, filmic, transparent);
+    Ok(std::mem::replace(&mut rendered.linear, denoised))
 }
 
 /// What a render produced: the distributed-ray-traced frame, or the raster preview.
@@ -726,11 +770,11 @@ fn stage_outputs(
     output: &std::path::Path,
     picture: &Picture,
     aovs: &[(strata::render::aov::Aov, strata::output::Frame)],
+    noisy: Option<&strata::output::Frame>,
 ) -> Result<Vec<strata::output::Staged>> {
     use strata::output::{stage_data_png, stage_frame_with_layers, stage_png_rgba8, OutputFormat};
     if OutputFormat::from_path(output)? == OutputFormat::Exr {
-        let layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
-        return Ok(vec![stage_frame_with_layers(output, picture.linear(), &layers)?]);
+        return Ok(vec![stage_frame_with_layers(output, picture.linear(), &exr_layers(aovs, noisy))?]);
     }
     let mut staged = vec![match picture {
         Picture::Rendered(r) => stage_png_rgba8(output, r.linear.width, r.linear.height, &r.display)?,
