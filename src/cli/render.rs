@@ -310,15 +310,7 @@ fn render_scene(
     let Some(mut job) = prepare_scene(args, scene_path)? else {
         return Ok(());
     };
-    // The denoiser loads before any work, so that a missing library costs nothing.
-    let denoiser = if args.denoise {
-        if job.part_plan.as_ref().is_some_and(|p| p.writes_part) {
-            bail!("--denoise works on whole frames, not on a part of one's samples (--samples, --shard)");
-        }
-        Some(strata::denoise::Denoiser::load()?)
-    } else {
-        None
-    };
+    let denoiser = load_denoiser(args, &job)?;
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         let trace = if several { args.trace.unwrap_or_default() } else { job.settings.trace };
@@ -369,19 +361,7 @@ fn render_scene(
                 return Err(strata::render::frame::Interrupted.into());
             }
         };
-        let aovs = match &args.aov {
-            Some(list) => {
-                let size = (job.settings.width, job.settings.height);
-                // Motion looks one frame ahead: 1 / --fps.
-                strata::render_aovs(&gpu.device, &job.scene, &on_gpu, size, &list.0, 1.0 / args.fps)?
-            }
-            None => Vec::new(),
-        };
-        let mut picture = picture;
-        let noisy = match (&denoiser, &mut picture) {
-            (Some(denoiser), Picture::Rendered(rendered)) => Some(denoise(denoiser, gpu, &job, &on_gpu, rendered)?),
-            _ => None,
-        };
+        let frame = FrameOutputs::make(args, gpu, &job, &on_gpu, denoiser.as_ref(), picture)?;
         // What the layer said so far; teardown messages are checked once the device is gone.
         check_log()?;
         let device_name = gpu.device.report.name.clone();
@@ -398,24 +378,20 @@ fn render_scene(
             check_log()?;
             match &part {
                 Some(part) => strata::partial::file::write_part(&output, part)?,
-                None => write_picture(&output, exr.as_deref(), &picture, &aovs, noisy.as_ref())?,
+                None => frame.write(&output, exr.as_deref())?,
             }
-            if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
-                write_camera_json(&path, &camera_metadata(&job, &picture))?;
-            }
+            frame.write_camera(&job, plan.number)?;
             if let Some(plan) = &job.part_plan {
                 plan.finish()?;
             }
             let part = job.part_plan.as_ref().filter(|p| p.writes_part).map(FramePart::target);
-            report(args, &job.settings, &job.scene, &picture, FrameReport { part, ..written });
+            report(args, &job.settings, &job.scene, &frame.picture, FrameReport { part, ..written });
             return Ok(());
         }
-        write_picture(&output, exr.as_deref(), &picture, &aovs, noisy.as_ref())?;
-        if let Some(path) = numbered_for(job.camera_json.as_deref(), plan.number) {
-            write_camera_json(&path, &camera_metadata(&job, &picture))?;
-        }
+        frame.write(&output, exr.as_deref())?;
+        frame.write_camera(&job, plan.number)?;
         finished.push(output.display().to_string());
-        report(args, &job.settings, &job.scene, &picture, written);
+        report(args, &job.settings, &job.scene, &frame.picture, written);
     }
     drop(on_gpu);
     check_log()?;
@@ -423,6 +399,62 @@ fn render_scene(
         eprintln!("strata: {} frames in {:.1} s", finished.len(), started.elapsed().as_secs_f64());
     }
     Ok(())
+}
+
+/// The denoiser `--denoise` needs, loaded before any work, so that a missing library costs nothing.
+fn load_denoiser(args: &RenderArgs, job: &SceneJob) -> Result<Option<strata::denoise::Denoiser>> {
+    if !args.denoise {
+        return Ok(None);
+    }
+    if job.part_plan.as_ref().is_some_and(|p| p.writes_part) {
+        bail!("--denoise works on whole frames, not on a part of one's samples (--samples, --shard)");
+    }
+    Ok(Some(strata::denoise::Denoiser::load()?))
+}
+
+/// What one frame writes: its picture (denoised with `--denoise`, the noisy one kept), and its AOVs.
+struct FrameOutputs {
+    picture: Picture,
+    aovs: Vec<(strata::render::aov::Aov, strata::output::Frame)>,
+    noisy: Option<strata::output::Frame>,
+}
+
+impl FrameOutputs {
+    /// The frame's AOVs and, with a denoiser, its picture denoised.
+    fn make(
+        args: &RenderArgs,
+        gpu: &Gpu,
+        job: &SceneJob,
+        on_gpu: &strata::render::SceneOnGpu,
+        denoiser: Option<&strata::denoise::Denoiser>,
+        mut picture: Picture,
+    ) -> Result<Self> {
+        let aovs = match &args.aov {
+            Some(list) => {
+                let size = (job.settings.width, job.settings.height);
+                // Motion looks one frame ahead: 1 / --fps.
+                strata::render_aovs(&gpu.device, &job.scene, on_gpu, size, &list.0, 1.0 / args.fps)?
+            }
+            None => Vec::new(),
+        };
+        let noisy = match (denoiser, &mut picture) {
+            (Some(denoiser), Picture::Rendered(rendered)) => Some(denoise(denoiser, gpu, job, on_gpu, rendered)?),
+            _ => None,
+        };
+        Ok(Self { picture, aovs, noisy })
+    }
+
+    fn write(&self, output: &std::path::Path, exr: Option<&std::path::Path>) -> Result<()> {
+        write_picture(output, exr, &self.picture, &self.aovs, self.noisy.as_ref())
+    }
+
+    /// The frame's `--camera-json`, if asked for, numbered as the frame is.
+    fn write_camera(&self, job: &SceneJob, number: Option<u32>) -> Result<()> {
+        match numbered_for(job.camera_json.as_deref(), number) {
+            Some(path) => write_camera_json(&path, &camera_metadata(job, &self.picture)),
+            None => Ok(()),
+        }
+    }
 }
 
 /// One frame's picture: the preview, or the render (of the part `job.part_plan` asks for, with the part it
