@@ -43,10 +43,13 @@ void main() {
     // BLEND's coverage sample: independent per pixel, surface point and sample (the draw record's per-sample key;
     // the point's position tells layers apart without gl_PrimitiveID, which a fragment shader may read only
     // with geometry shaders enabled).
-    uint pixel = uint(gl_FragCoord.x) | (uint(gl_FragCoord.y) << 16u);
-    uvec3 at = floatBitsToUint(in_world_position);
-    uint h = pcg_hash(d.coverage_key ^ pcg_hash(pixel ^ pcg_hash(d.instance)));
-    float coverage_u = unit_float(pcg_hash(h ^ pcg_hash(at.x ^ pcg_hash(at.y ^ pcg_hash(at.z)))));
+    float coverage_u = 0.0;
+    if (m.alpha_mode == ALPHA_BLEND) {
+        uint pixel = uint(gl_FragCoord.x) | (uint(gl_FragCoord.y) << 16u);
+        uvec3 at = floatBitsToUint(in_world_position);
+        uint h = pcg_hash(d.coverage_key ^ pcg_hash(pixel ^ pcg_hash(d.instance)));
+        coverage_u = unit_float(pcg_hash(h ^ pcg_hash(at.x ^ pcg_hash(at.y ^ pcg_hash(at.z)))));
+    }
     if (!alpha_test_passes(m, p.base.a, coverage_u)) discard;
     // Without a bump the normal (interpolated, or tilted by a normal texture) still needs its unit length.
     vec3 shading = m.bump.kind != BUMP_NONE ? p.normal : normalize(p.normal);

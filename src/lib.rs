@@ -78,8 +78,39 @@ pub fn render_preview(
     pass.render(scene, &on_gpu.geometry, &on_gpu.textures, settings)
 }
 
-/// Renders the G-buffer once (pinhole through the lens centre, no jitter, at the shutter's opening) and returns
-/// the requested AOVs as raw values; `frame_interval` (seconds) is how far ahead the motion AOV looks.
+/// The G-buffer through each of `jitters` (sub-pixel offsets, pixels) with a pinhole at the shutter's opening,
+/// read back: what the AOVs and the denoiser's guides are made of. Also the pixel-centre camera.
+fn pinhole_gbuffers(
+    device: &std::sync::Arc<vk::Device>,
+    scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
+    (width, height): (u32, u32),
+    jitters: &[glam::Vec2],
+) -> Result<Vec<render::gbuffer::GBufferFrame>> {
+    let pass = render::gbuffer::GBufferPass::new(device)?;
+    let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
+    let transforms = scene.instance_transforms_at(scene.shutter.0);
+    let materials = pass.materials(scene, &on_gpu.textures)?;
+    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
+    let camera = pinhole_at(scene, scene.shutter.0);
+    jitters
+        .iter()
+        .map(|&jitter| {
+            let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), jitter);
+            pass.render_to_host(&gbuffer, &inputs, &sample)
+        })
+        .collect()
+}
+
+/// The scene's camera at time `t` with its lens closed to a pinhole.
+fn pinhole_at(scene: &scene::Scene, t: f32) -> scene::Camera {
+    let mut camera = scene.camera_at(t);
+    camera.lens.aperture_radius = 0.0;
+    camera
+}
+
+/// Renders the G-buffer once (pinhole through the pixel centres, at the shutter's opening) and returns the
+/// requested AOVs as raw values; `frame_interval` (seconds) is how far ahead the motion AOV looks.
 pub fn render_aovs(
     device: &std::sync::Arc<vk::Device>,
     scene: &scene::Scene,
@@ -88,31 +119,23 @@ pub fn render_aovs(
     aovs: &[render::aov::Aov],
     frame_interval: f32,
 ) -> Result<Vec<(render::aov::Aov, output::Frame)>> {
-    let pass = render::gbuffer::GBufferPass::new(device)?;
-    let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
+    let frames = pinhole_gbuffers(device, scene, on_gpu, (width, height), &[glam::Vec2::ZERO])?;
     let (now, next) = (scene.shutter.0, scene.shutter.0 + frame_interval);
-    let transforms = scene.instance_transforms_at(now);
-    let materials = pass.materials(scene, &on_gpu.textures)?;
-    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
-    let pinhole_at = |t: f32| {
-        let mut camera = scene.camera_at(t);
-        camera.lens.aperture_radius = 0.0;
-        math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO)
+    let centre_sample = |t: f32| {
+        math::lens::camera_sample(&pinhole_at(scene, t), width, height, glam::Vec2::splat(0.5), glam::Vec2::ZERO)
     };
-    let sample = pinhole_at(now);
-    let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
     let labels = scene.instances.iter().map(|i| i.node.map_or(0, |n| n as u32 + 1)).collect();
     let node_categories = scene.node_categories();
     let categories = scene.instances.iter().map(|i| i.node.and_then(|n| node_categories.get(n)).copied().unwrap_or(0));
     let aov_scene = render::aov::AovScene {
         instance_labels: labels,
         categories: categories.collect(),
+        now: scene.instance_transforms_at(now),
         next: scene.instance_transforms_at(next),
-        now: transforms,
-        camera_now: sample,
-        camera_next: pinhole_at(next),
+        camera_now: centre_sample(now),
+        camera_next: centre_sample(next),
     };
-    aovs.iter().map(|&aov| Ok((aov, aov.extract(&frame, &aov_scene)?))).collect()
+    aovs.iter().map(|&aov| Ok((aov, aov.extract(&frames[0], &aov_scene)?))).collect()
 }
 
 /// The denoiser's guides (the first-hit albedo and shading normal), anti-aliased as the picture is: the mean of
@@ -127,20 +150,14 @@ pub fn denoise_guides(
 ) -> Result<(output::Frame, output::Frame)> {
     use render::gbuffer_layout::{ALBEDO, SHADING_NORMAL};
     const GRID: u32 = 4;
-    let pass = render::gbuffer::GBufferPass::new(device)?;
-    let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
-    let transforms = scene.instance_transforms_at(scene.shutter.0);
-    let materials = pass.materials(scene, &on_gpu.textures)?;
-    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
-    let mut camera = scene.camera_at(scene.shutter.0);
-    camera.lens.aperture_radius = 0.0;
+    let jitters: Vec<glam::Vec2> = (0..GRID * GRID)
+        .map(|k| glam::Vec2::new((k % GRID) as f32 + 0.5, (k / GRID) as f32 + 0.5) / GRID as f32 - 0.5)
+        .collect();
+    let frames = pinhole_gbuffers(device, scene, on_gpu, (width, height), &jitters)?;
     let pixels = (width * height) as usize;
     let (mut albedo, mut normal) = (vec![[0.0f32; 4]; pixels], vec![[0.0f32; 4]; pixels]);
-    let weight = 1.0 / (GRID * GRID) as f32;
-    for k in 0..GRID * GRID {
-        let jitter = glam::Vec2::new((k % GRID) as f32 + 0.5, (k / GRID) as f32 + 0.5) / GRID as f32 - 0.5;
-        let sample = math::lens::camera_sample(&camera, width, height, glam::Vec2::splat(0.5), jitter);
-        let frame = pass.render_to_host(&gbuffer, &inputs, &sample)?;
+    let weight = 1.0 / jitters.len() as f32;
+    for frame in &frames {
         for i in 0..pixels {
             let (x, y) = (i as u32 % width, i as u32 / width);
             if !frame.covered(x, y) {

@@ -93,7 +93,8 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, bool bsdf_follows, in
         vec2 uv0 = w.x * l.uv01.xy + w.y * l.uv01.zw + w.z * l.uv2_material.xy;
         vec2 uv1 = w.x * l.uv1_01.xy + w.y * l.uv1_01.zw + w.z * l.uv1_2.xy;
         // A BLEND emitter's coverage sample: hashed from the point sampled on it, as a ray's from its hit.
-        float coverage_u = unit_float(pcg_hash(pcg_hash(floatBitsToUint(ls.bary.x) ^ pc.sample_index) ^ floatBitsToUint(ls.bary.y)));
+        float coverage_u = m.alpha_mode != ALPHA_BLEND ? 0.0
+            : unit_float(pcg_hash(pcg_hash(floatBitsToUint(ls.bary.x) ^ pc.sample_index) ^ floatBitsToUint(ls.bary.y)));
         if (ALPHA_TESTED != 0u && m.alpha_mode != ALPHA_OPAQUE && !material_covers(m, dot(w, l.corner_alpha.xyz), uv0, uv1, 0.0, coverage_u)) {
             return vec3(0.0);
         }

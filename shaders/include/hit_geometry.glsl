@@ -122,6 +122,8 @@ bool alpha_covers(int record, uint primitive, vec2 barycentrics, float t, mat4x3
         float footprint = footprint_lod(width, world_edges, dir, uv_area.z);
         lod = texture_lod(m.base_color_uv_rows, vec2(footprint));
     }
-    return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod, ray_coverage_sample(record, primitive, origin, dir, t));
+    // Only BLEND draws a coverage sample.
+    float u = m.alpha_mode == ALPHA_BLEND ? ray_coverage_sample(record, primitive, origin, dir, t) : 0.0;
+    return material_covers(m, hit_color(h).a, uv_area.xy, uv_area.xy, lod, u);
 }
 #endif
