@@ -33,6 +33,9 @@ pub struct LoadOptions {
     pub allow_any_uri: Option<bool>,
     /// The animation clip that plays; `None`: what the scene file says, else the first (as viewers do).
     pub animation: Option<scene::animation::AnimationChoice>,
+    /// The `KHR_materials_variants` variant whose materials the meshes take; `None`: what the scene file says,
+    /// else the file's default materials.
+    pub variant: Option<String>,
 }
 
 /// Loads a `.gltf` / `.glb` file, or a scene file (`.toml`) and the glTF it names.
@@ -41,15 +44,15 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene> {
     let policy =
         options.allow_any_uri.map(|any| if any { UriPolicy::AnyLocalPath } else { UriPolicy::InsideDirectory });
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    let (mut loaded, file_clip) = match ext.as_deref() {
+    let (mut loaded, file_clip, file_variant) = match ext.as_deref() {
         Some("gltf") | Some("glb") => {
             let options = scene::gltf_import::LoadOptions { uri_policy: policy.unwrap_or_default() };
             let scene = scene::gltf_import::load_gltf(path, &options)?;
-            (LoadedScene { scene, settings: Default::default() }, None)
+            (LoadedScene { scene, settings: Default::default() }, None, None)
         }
         Some("toml") => {
             let file = scene::scene_file::load_scene_file(path, policy)?;
-            (LoadedScene { scene: file.scene, settings: file.settings }, file.animation)
+            (LoadedScene { scene: file.scene, settings: file.settings }, file.animation, file.variant)
         }
         Some(other) => bail!("{}: unknown scene extension \".{other}\" (use .gltf, .glb or .toml)", path.display()),
         None => bail!("{}: scene file has no extension (use .gltf, .glb or .toml)", path.display()),
@@ -59,6 +62,12 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<LoadedScene> {
     let note = scene::animation::select_clip(&mut loaded.scene.animations, choice)
         .with_context(|| format!("{}: choosing the animation clip", path.display()))?;
     loaded.scene.notes.extend(note);
+    if let Some(variant) = options.variant.as_ref().or(file_variant.as_ref()) {
+        loaded
+            .scene
+            .select_variant(variant)
+            .with_context(|| format!("{}: choosing the material variant", path.display()))?;
+    }
     Ok(loaded)
 }
 
@@ -208,6 +217,7 @@ pub fn part_provenance(
         source: _,
         warnings: _,
         notes: _,
+        variants: _,
         meshes,
         materials,
         textures,

@@ -681,3 +681,46 @@ fn webp_and_ktx2_textures_decode_to_their_png_twins_texels() {
         with_png.warnings
     );
 }
+
+/// KHR_materials_variants: a triangle whose default material is 0 and whose variants "red" and "blue" map it to
+/// materials 1 and 2; `--variant` (LoadOptions::variant) or the scene file's `variant` picks one, the
+/// command line's winning, and an unknown variant is an error listing the file's.
+#[test]
+fn material_variants_pick_each_primitives_material() {
+    let dir = temp_dir("variants");
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_materials_variants"],
+        "extensions": {"KHR_materials_variants": {"variants": [{"name": "red"}, {"name": "blue"}]}},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0,
+            "extensions": {"KHR_materials_variants": {"mappings": [
+                {"material": 1, "variants": [0]}, {"material": 2, "variants": [1]}]}}}]}],
+        "materials": [{"name": "grey"}, {"name": "red"}, {"name": "blue"}],
+        "buffers": [{"byteLength": 36, "uri": data_uri("application/octet-stream",
+            &bytes_f32(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]))}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]
+    });
+    let file = dir.join("variants.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let material = |path: &std::path::Path, variant: Option<&str>| {
+        let options = strata::LoadOptions { variant: variant.map(str::to_owned), ..Default::default() };
+        strata::load(path, &options).map(|l| l.scene.meshes[0].primitives[0].material)
+    };
+    assert_eq!(material(&file, None).unwrap(), Some(0), "the default material without a variant");
+    assert_eq!(material(&file, Some("red")).unwrap(), Some(1));
+    assert_eq!(material(&file, Some("blue")).unwrap(), Some(2));
+    let error = format!("{:#}", material(&file, Some("green")).unwrap_err());
+    assert!(error.contains("no material variant \"green\" (red, blue)") && error.contains("variants.gltf"), "{error}");
+    let toml = dir.join("variants.toml");
+    std::fs::write(&toml, "gltf = \"variants.gltf\"\nvariant = \"blue\"\n").unwrap();
+    assert_eq!(material(&toml, None).unwrap(), Some(2), "the scene file's variant");
+    assert_eq!(material(&toml, Some("red")).unwrap(), Some(1), "the command line's wins");
+    let mut bad = doc.clone();
+    bad["meshes"][0]["primitives"][0]["extensions"]["KHR_materials_variants"]["mappings"][0]["material"] = json!(9);
+    std::fs::write(&file, serde_json::to_vec(&bad).unwrap()).unwrap();
+    let error = format!("{:#}", material(&file, None).unwrap_err());
+    assert!(error.contains("KHR_materials_variants mapping") && error.contains("material 9"), "{error}");
+}

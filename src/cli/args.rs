@@ -264,6 +264,10 @@ pub struct RenderArgs {
     /// first unless this or the scene file's `animation` names another.
     #[arg(long, value_name = "NAME|INDEX", value_parser = parse_animation)]
     pub animation: Option<strata::scene::animation::AnimationChoice>,
+    /// The KHR_materials_variants variant whose materials the meshes take, by name (`strata info FILE` lists
+    /// them) [default: the scene file's `variant`, else the file's default materials].
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
     /// Render one frame at time T seconds of the animation (its shutter as --shutter-angle says): the same picture
     /// as the frame of --frames at that time.
     #[arg(long, value_name = "T", value_parser = parse_time, allow_hyphen_values = true)]

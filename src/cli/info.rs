@@ -94,6 +94,9 @@ fn scene_info(path: &std::path::Path) -> Result<()> {
             let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channels strata plays", clip.name);
         }
     }
+    if !scene.variants.is_empty() {
+        let _ = writeln!(text, "  material variants (--variant NAME): {}", scene.variants.join(", "));
+    }
     for warning in &scene.warnings {
         let _ = writeln!(text, "  warning: {warning}");
     }

@@ -240,8 +240,11 @@ struct SceneJob {
 /// checks every output name and the files the run writes, reads and removes before any work. None: this shard
 /// has nothing to do.
 fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Option<SceneJob>> {
-    let options =
-        strata::LoadOptions { allow_any_uri: args.allow_any_uri.then_some(true), animation: args.animation.clone() };
+    let options = strata::LoadOptions {
+        allow_any_uri: args.allow_any_uri.then_some(true),
+        animation: args.animation.clone(),
+        variant: args.variant.clone(),
+    };
     let loaded = strata::load(scene_path, &options)?;
     for warning in &loaded.scene.warnings {
         eprintln!("warning: {}: {warning}", scene_path.display());

@@ -13,7 +13,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 11] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 12] = [
     "EXT_mesh_gpu_instancing",
     "EXT_texture_webp",
     "KHR_lights_punctual",
@@ -22,6 +22,7 @@ pub const SUPPORTED_EXTENSIONS: [&str; 11] = [
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_unlit",
+    "KHR_materials_variants",
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
     "KHR_texture_transform",
@@ -65,11 +66,13 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
     mark_color_textures(&mut scene);
     warn_about_unread_uv_sets(&mut scene);
+    scene.variants = variant_names(document);
     let quantized = uses_quantization(document);
     for mesh in document.meshes() {
         scene.meshes.push(import_mesh(&mesh, &buffers, mesh.weights().unwrap_or(&[]), quantized)?);
     }
     let node_meshes = meshes_at_node_weights(document, &buffers, &mut scene)?;
+    check_variant_mappings(&scene)?;
     import_nodes(document, &buffers, &mut scene, &node_meshes)?;
     for animation in document.animations() {
         let a = import_animation(&animation, &buffers, &scene)
@@ -297,6 +300,36 @@ fn node_transform(node: &gltf::Node<'_>) -> NodeTransform {
             scale: Vec3::from_array(scale),
         },
     }
+}
+
+/// Every KHR_materials_variants mapping names a variant and a material the file has.
+fn check_variant_mappings(scene: &Scene) -> Result<()> {
+    for mesh in &scene.meshes {
+        for &(variant, material) in mesh.primitives.iter().flat_map(|p| &p.variant_materials) {
+            if variant >= scene.variants.len() || material >= scene.materials.len() {
+                bail!(
+                    "mesh \"{}\": a KHR_materials_variants mapping names variant {variant} and material {material} \
+                     ({} variants, {} materials)",
+                    mesh.name,
+                    scene.variants.len(),
+                    scene.materials.len()
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `KHR_materials_variants`' variant names.
+fn variant_names(document: &gltf::Document) -> Vec<String> {
+    let variants =
+        document.extension_value("KHR_materials_variants").and_then(|e| e.get("variants")?.as_array().cloned());
+    variants
+        .into_iter()
+        .flatten()
+        .enumerate()
+        .map(|(i, v)| v.get("name").and_then(|n| n.as_str()).map_or_else(|| format!("variant {i}"), str::to_owned))
+        .collect()
 }
 
 /// A node's semantic class from its `extras.category_id` (the name BOP and BlenderProc give it): a whole number

@@ -115,7 +115,14 @@ fn import_primitive(
         bail!("index {bad} is out of range ({} vertices)", positions.len());
     }
     let attribute = |semantic: gltf::Semantic| primitive.get(&semantic);
-    let mut p = Primitive { positions, indices, material: primitive.material().index(), ..Default::default() };
+    let variant_materials = variant_mappings(primitive)?;
+    let mut p = Primitive {
+        positions,
+        indices,
+        material: primitive.material().index(),
+        variant_materials,
+        ..Default::default()
+    };
     if let Some(a) = attribute(gltf::Semantic::Normals) {
         let normals = read_floats::<3>("NORMAL", &a, buffers)?;
         p.normals = normals.into_iter().map(|v| Vec3::from_array(v).normalize_or_zero()).collect();
@@ -249,4 +256,21 @@ fn flatten_with_face_normals(p: &mut Primitive) {
     p.colors = gather(&p.colors, &p.indices);
     p.normals = normals;
     p.indices = (0..p.positions.len() as u32).collect();
+}
+
+/// A primitive's `KHR_materials_variants` mappings: (variant, material) for each variant a mapping lists.
+fn variant_mappings(primitive: &gltf::Primitive<'_>) -> Result<Vec<(usize, usize)>> {
+    let Some(extension) = primitive.extension_value("KHR_materials_variants") else { return Ok(Vec::new()) };
+    let mut pairs = Vec::new();
+    for mapping in extension.get("mappings").and_then(|m| m.as_array()).into_iter().flatten() {
+        let material = mapping
+            .get("material")
+            .and_then(|m| m.as_u64())
+            .context("KHR_materials_variants: a mapping has no material")?;
+        for variant in mapping.get("variants").and_then(|v| v.as_array()).into_iter().flatten() {
+            let variant = variant.as_u64().context("KHR_materials_variants: a variant is not an index")?;
+            pairs.push((variant as usize, material as usize));
+        }
+    }
+    Ok(pairs)
 }

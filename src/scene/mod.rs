@@ -51,6 +51,9 @@ pub struct Primitive {
     pub dpdv: Vec<Vec3>,
     pub indices: Vec<u32>,
     pub material: Option<usize>,
+    /// `KHR_materials_variants`: (variant, material) pairs; the chosen variant's material replaces `material`
+    /// (Scene::select_variant).
+    pub variant_materials: Vec<(usize, usize)>,
 }
 
 impl Primitive {
@@ -149,6 +152,8 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// What the loader chose where the file left a choice (which animation clip plays), for the user to read.
     pub notes: Vec<String>,
+    /// `KHR_materials_variants`' variant names, in the file's order.
+    pub variants: Vec<String>,
 }
 
 impl Scene {
@@ -170,6 +175,22 @@ impl Scene {
 
     pub fn triangle_count(&self) -> usize {
         self.instances.iter().flat_map(|i| self.meshes[i.mesh].primitives.iter()).map(Primitive::triangle_count).sum()
+    }
+
+    /// Gives every primitive the material `KHR_materials_variants` maps to the variant named `name` (a primitive
+    /// without a mapping for it keeps its default material). An unknown name is an error listing the variants.
+    pub fn select_variant(&mut self, name: &str) -> anyhow::Result<()> {
+        let Some(variant) = self.variants.iter().position(|v| v == name) else {
+            let list =
+                if self.variants.is_empty() { "the scene has none".to_string() } else { self.variants.join(", ") };
+            anyhow::bail!("no material variant \"{name}\" ({list})");
+        };
+        for primitive in self.meshes.iter_mut().flat_map(|m| &mut m.primitives) {
+            if let Some(&(_, material)) = primitive.variant_materials.iter().find(|(v, _)| *v == variant) {
+                primitive.material = Some(material);
+            }
+        }
+        Ok(())
     }
 
     /// Each node's semantic class: its own `category`, else its nearest ancestor's, else 0 (unlabelled).

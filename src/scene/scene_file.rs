@@ -25,6 +25,7 @@ struct FileRoot {
     #[serde(default)]
     allow_any_uri: bool,
     animation: Option<S<toml::Value>>,
+    variant: Option<S<String>>,
     camera: Option<CameraSection>,
     #[serde(default, rename = "light")]
     lights: Vec<LightSection>,
@@ -138,6 +139,8 @@ pub struct SceneFile {
     pub settings: SettingsOverrides,
     /// The animation clip the file's `animation` key names (it plays unless the command line names another).
     pub animation: Option<super::animation::AnimationChoice>,
+    /// The material variant the file's `variant` key names (unless the command line names another).
+    pub variant: Option<String>,
     /// The glTF file it names, resolved against the scene file's directory.
     pub gltf_path: PathBuf,
 }
@@ -233,7 +236,8 @@ pub fn load_scene_file(path: &Path, uri_policy: Option<UriPolicy>) -> Result<Sce
     };
     let animation = root.animation.as_ref().map(|a| animation_choice(&source, a)).transpose()?;
     scene.source = path.to_path_buf();
-    Ok(SceneFile { scene, settings, gltf_path, animation })
+    let variant = root.variant.as_ref().map(|v| v.get_ref().clone());
+    Ok(SceneFile { scene, settings, gltf_path, animation, variant })
 }
 
 /// The `animation` key: a clip's name or its index.
