@@ -139,8 +139,7 @@ pub fn render_aovs(
     let aov_scene = render::aov::AovScene {
         instance_labels: labels,
         categories: categories.collect(),
-        now: scene.instance_transforms_at(now),
-        next: scene.instance_transforms_at(next),
+        moves: render::aov::AovScene::moves(&scene.instance_transforms_at(now), &scene.instance_transforms_at(next)),
         camera_now: centre_sample(now),
         camera_next: centre_sample(next),
     };

@@ -41,9 +41,9 @@ pub struct AovScene {
     pub instance_labels: Vec<u32>,
     /// Per instance: its node's semantic class (0: none).
     pub categories: Vec<u32>,
-    /// Per instance: its world transform at this frame's time and one frame later.
-    pub now: Vec<glam::Mat4>,
-    pub next: Vec<glam::Mat4>,
+    /// Per instance: where a world point of it now is one frame later (its transform then times the inverse of
+    /// its transform now; None where that has no inverse). See [`AovScene::moves`].
+    pub moves: Vec<Option<glam::Mat4>>,
     /// The pixel-centre camera now and one frame later.
     pub camera_now: crate::math::lens::CameraSample,
     pub camera_next: crate::math::lens::CameraSample,
@@ -176,16 +176,22 @@ impl Aov {
     }
 }
 
-/// Where `world`, a point of instance `k` seen now, is one frame later, minus where it is now, in pixels: the
-/// point rides on its instance's transform (object space is where it stays put) and each end is projected by
-/// its own camera.
+impl AovScene {
+    /// Each instance's motion over one frame, from its transforms now and one frame later: a point rides on its
+    /// instance's transform (object space is where it stays put). Once per instance, not per pixel.
+    pub fn moves(now: &[glam::Mat4], next: &[glam::Mat4]) -> Vec<Option<glam::Mat4>> {
+        now.iter()
+            .zip(next)
+            .map(|(now, next)| (now.determinant().abs() >= 1e-20).then(|| *next * now.inverse()))
+            .collect()
+    }
+}
+
+/// Where `world`, a point of instance `k` seen now, is one frame later, minus where it is now, in pixels, each end
+/// projected by its own camera.
 fn flow(scene: &AovScene, k: usize, world: glam::Vec3, width: u32, height: u32) -> [f32; 2] {
     use crate::math::lens::project_to_pixel;
-    let (Some(now), Some(next)) = (scene.now.get(k), scene.next.get(k)) else { return [0.0; 2] };
-    if now.determinant().abs() < 1e-20 {
-        return [0.0; 2];
-    }
-    let later = *next * now.inverse();
+    let Some(Some(later)) = scene.moves.get(k) else { return [0.0; 2] };
     let moved = later.transform_point3(world);
     let f = project_to_pixel(&scene.camera_next, moved, width, height)
         - project_to_pixel(&scene.camera_now, world, width, height);

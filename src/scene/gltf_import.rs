@@ -206,7 +206,7 @@ fn with_texture_sources(bytes: &[u8]) -> Result<Option<Vec<u8>>> {
         if texture.get("source").is_some() {
             continue;
         }
-        let source = ["KHR_texture_basisu", "EXT_texture_webp"]
+        let source = super::gltf_material::IMAGE_EXTENSIONS
             .iter()
             .find_map(|ext| texture.get("extensions")?.get(ext)?.get("source").cloned());
         if let (Some(source), Some(object)) = (source, texture.as_object_mut()) {

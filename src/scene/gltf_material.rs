@@ -39,7 +39,7 @@ pub(super) fn load_images(
 }
 
 /// Extensions that give a texture another image (KTX2, WebP) beside or instead of its `source`.
-const IMAGE_EXTENSIONS: [&str; 2] = ["KHR_texture_basisu", "EXT_texture_webp"];
+pub(super) const IMAGE_EXTENSIONS: [&str; 2] = ["KHR_texture_basisu", "EXT_texture_webp"];
 
 /// The image a texture's KHR_texture_basisu or EXT_texture_webp names, if any.
 fn extension_image(texture: &gltf::Texture<'_>) -> Option<(&'static str, usize)> {
