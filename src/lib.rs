@@ -10,10 +10,13 @@ pub mod math;
 pub mod output;
 pub mod partial;
 pub mod render;
+pub mod renderer;
 pub mod scene;
 pub mod shaders;
 pub mod vk;
 pub mod write_plan;
+
+pub use renderer::{RenderRequest, Rendered, Renderer, RendererOptions, Scene};
 
 use anyhow::{bail, Context as _, Result};
 use std::path::Path;
@@ -179,6 +182,24 @@ pub fn denoise_guides(
         }
     }
     Ok((output::Frame::new(width, height, albedo)?, output::Frame::new(width, height, normal)?))
+}
+
+/// Denoises a rendered frame in place (its linear radiance and its display image, made as the resolve makes it)
+/// with the albedo and normal guides of [`denoise_guides`]; returns the noisy radiance.
+pub fn denoise_frame(
+    denoiser: &denoise::Denoiser,
+    device: &std::sync::Arc<vk::Device>,
+    scene: &scene::Scene,
+    on_gpu: &render::SceneOnGpu,
+    settings: &scene::settings::RenderSettings,
+    rendered: &mut render::frame::RenderedFrame,
+) -> Result<output::Frame> {
+    let (albedo, normal) = denoise_guides(device, scene, on_gpu, (settings.width, settings.height))?;
+    let denoised = denoiser.denoise(&rendered.linear, &albedo, &normal)?;
+    let filmic = settings.tone_map == scene::settings::ToneMap::Filmic;
+    let transparent = settings.backdrop_for(scene.environment.is_some()) == scene::settings::Backdrop::Transparent;
+    rendered.display = output::display_rgba8(&denoised, rendered.exposure, filmic, transparent);
+    Ok(std::mem::replace(&mut rendered.linear, denoised))
 }
 
 /// Renders `scene` with distributed ray tracing: `settings.spp` samples of G-buffer + accumulation, then the

@@ -316,6 +316,16 @@ pub struct RenderArgs {
 
 impl RenderArgs {
     /// What the command line says of the camera (None where it is silent): laid over the scene's.
+    /// How the command line asks to see the scene.
+    pub fn view(&self) -> strata::scene::framing::View {
+        strata::scene::framing::View {
+            orbit: self.orbit,
+            target: self.target.map(glam::Vec3::from_array),
+            yfov_degrees: self.yfov,
+            turntable: self.turntable.is_some(),
+        }
+    }
+
     pub fn camera_overrides(&self) -> strata::scene::settings::CameraOverrides {
         strata::scene::settings::CameraOverrides {
             aperture_radius: self.aperture,

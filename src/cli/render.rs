@@ -1,13 +1,14 @@
 //! `strata render`: load, render, write atomically, summarize.
-use super::args::{ExposureArg, Orbit, RenderArgs};
+use super::args::{ExposureArg, RenderArgs};
 use super::print_stdout;
 use super::progress::ProgressBar;
 use super::scale_out::{self, FramePart};
 use super::sequence;
 use super::summary::Summary;
 use anyhow::{anyhow, bail, Context as _, Result};
-use strata::scene::settings::Backdrop;
-use strata::vk::{Gpu, GpuOptions};
+use strata::scene::framing::Framing;
+use strata::vk::Gpu;
+use strata::{Renderer, RendererOptions};
 
 /// Set by Ctrl-C: the sample loop stops after the batch in flight; a second Ctrl-C exits at once (nothing has
 /// been written either way: outputs are written atomically at the end).
@@ -56,10 +57,10 @@ pub fn render(args: RenderArgs) -> Result<()> {
         check_batch(args_output(&args), &args)?;
     }
     // One device and one set of pipelines for every scene; made by the first scene that gets that far.
-    let mut gpu: Option<Gpu> = None;
+    let mut renderer: Option<Renderer> = None;
     let mut failed: Vec<String> = Vec::new();
     for scene_path in &args.scenes {
-        match render_scene(&args, scene_path, &mut gpu, several) {
+        match render_scene(&args, scene_path, &mut renderer, several) {
             Ok(()) => {}
             Err(e) if several && e.downcast_ref::<strata::render::frame::Interrupted>().is_none() => {
                 // Loading errors name their file already; others get it in front.
@@ -75,8 +76,8 @@ pub fn render(args: RenderArgs) -> Result<()> {
             Err(e) => return Err(e),
         }
     }
-    let log = gpu.as_ref().map(|g| g.validation_log());
-    drop(gpu);
+    let log = renderer.as_ref().map(|r| r.gpu().validation_log());
+    drop(renderer);
     if let (true, Some(log)) = (args.gpu.validate, log) {
         log.check().map_err(|report| anyhow!("{report}"))?;
     }
@@ -273,11 +274,8 @@ fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Opti
     let sequence = sequence_of(args)?;
     let mut scene = loaded.scene;
     light_the_scene(args, &mut scene, &settings, scene_path)?;
-    let framing = Framing::of(args, &scene, settings.width as f32 / settings.height as f32)?;
-    match framing.camera(None) {
-        Some(camera) => scene.camera = Some(camera),
-        None => apply_yfov(&mut scene, args.yfov),
-    }
+    let framing = Framing::of(&args.view(), &scene, settings.width as f32 / settings.height as f32)?;
+    framing.apply(&mut scene);
     args.camera_overrides()
         .apply(&mut scene)
         .with_context(|| format!("{}: applying the command line's camera options", scene_path.display()))?;
@@ -306,7 +304,7 @@ fn prepare_scene(args: &RenderArgs, scene_path: &std::path::Path) -> Result<Opti
 fn render_scene(
     args: &RenderArgs,
     scene_path: &std::path::Path,
-    gpu_slot: &mut Option<Gpu>,
+    gpu_slot: &mut Option<Renderer>,
     several: bool,
 ) -> Result<()> {
     use std::sync::atomic::Ordering;
@@ -317,14 +315,14 @@ fn render_scene(
     let started = std::time::Instant::now();
     if gpu_slot.is_none() {
         let trace = if several { args.trace.unwrap_or_default() } else { job.settings.trace };
-        *gpu_slot = Some(Gpu::new(&GpuOptions {
+        *gpu_slot = Some(Renderer::new(&RendererOptions {
             validation: args.gpu.validate,
             echo_messages: args.gpu.validate,
             device: args.gpu.device.clone(),
-            needs: strata::render::accumulate::TracePath::device_needs(trace),
+            trace,
         })?);
     }
-    let gpu = gpu_slot.as_ref().expect("made above");
+    let gpu = gpu_slot.as_ref().expect("made above").gpu();
     let log = gpu.validation_log();
     let check_log = || if args.gpu.validate { log.check().map_err(|report| anyhow!("{report}")) } else { Ok(()) };
     // Geometry, textures and the environment go up once for every frame and pass of this run.
@@ -441,7 +439,9 @@ impl FrameOutputs {
             None => Vec::new(),
         };
         let noisy = match (denoiser, &mut picture) {
-            (Some(denoiser), Picture::Rendered(rendered)) => Some(denoise(denoiser, gpu, job, on_gpu, rendered)?),
+            (Some(denoiser), Picture::Rendered(rendered)) => {
+                Some(strata::denoise_frame(denoiser, &gpu.device, &job.scene, on_gpu, &job.settings, rendered)?)
+            }
             _ => None,
         };
         Ok(Self { picture, aovs, noisy })
@@ -508,11 +508,7 @@ fn light_the_scene(
     scene_path: &std::path::Path,
 ) -> Result<()> {
     if let Some(path) = &args.environment {
-        scene.environment = Some(if path.as_os_str() == "studio" {
-            strata::scene::environment::Environment::studio(512, 256)
-        } else {
-            strata::scene::environment::Environment::load(path)?
-        });
+        scene.environment = Some(strata::scene::environment::Environment::named(path)?);
     }
     if let Some(environment) = &mut scene.environment {
         if let Some(r) = args.environment_rotation {
@@ -524,16 +520,11 @@ fn light_the_scene(
     } else if args.environment_rotation.is_some() || args.environment_intensity.is_some() {
         bail!("--environment-rotation and --environment-intensity need an environment (--environment FILE)");
     }
-    if settings.backdrop == Some(Backdrop::Environment) && scene.environment.is_none() {
-        bail!("--background environment needs an environment (--environment FILE, or [environment] in the scene file)");
+    if args.preview {
+        return Ok(());
     }
-    if !args.preview && !scene.has_light() {
-        scene.add_default_light();
-        eprintln!(
-            "warning: {}: the scene has no lights or emissive surfaces; lighting it with a default key light \
-             (add [[light]] tables in a scene file, or --environment, see docs/scene-format.md)",
-            scene_path.display()
-        );
+    if let Some(warning) = scene.light_for_render(settings.backdrop)? {
+        eprintln!("warning: {}: {warning}", scene_path.display());
     }
     Ok(())
 }
@@ -543,7 +534,7 @@ fn interrupted(
     finished: Vec<String>,
     total: usize,
     on_gpu: strata::render::SceneOnGpu,
-    gpu: Option<Gpu>,
+    gpu: Option<Renderer>,
 ) -> Result<()> {
     drop(on_gpu);
     drop(gpu);
@@ -562,7 +553,7 @@ fn stopped_with_checkpoint(
     checkpoint: &std::path::Path,
     save_failed: bool,
     on_gpu: strata::render::SceneOnGpu,
-    gpu: Option<Gpu>,
+    gpu: Option<Renderer>,
 ) -> Result<()> {
     drop(on_gpu);
     drop(gpu);
@@ -604,76 +595,6 @@ fn sequence_of(args: &RenderArgs) -> Result<sequence::Sequence> {
     })
 }
 
-/// Where the camera comes from: the scene's, or one strata places (--orbit, --target, --turntable, or no camera
-/// in the scene) that frames the scene's bounds in this image's shape, with --yfov.
-struct Framing {
-    /// Whether strata places the camera.
-    places: bool,
-    /// An explicit orbit (--orbit, or a turntable's): its azimuth turns per view.
-    orbit: Option<Orbit>,
-    /// Otherwise the default framing direction.
-    direction: glam::Vec3,
-    target: Option<glam::Vec3>,
-    /// Vertical field of view, radians.
-    yfov: f32,
-    bounds: Option<(glam::Vec3, glam::Vec3)>,
-    aspect: f32,
-}
-
-/// The elevation of a turntable, or of --target alone, in degrees.
-const DEFAULT_ELEVATION: f32 = 20.0;
-
-impl Framing {
-    fn of(args: &RenderArgs, scene: &strata::scene::Scene, aspect: f32) -> Result<Self> {
-        let target = args.target.map(glam::Vec3::from_array);
-        let explicit = args.orbit.is_some() || target.is_some() || args.turntable.is_some();
-        let places = explicit || scene.camera.is_none();
-        if !places && args.yfov.is_some() {
-            if let Some(camera) = &scene.camera {
-                if !matches!(camera.projection, strata::scene::Projection::Perspective { .. }) {
-                    bail!("--yfov needs a perspective camera; this scene's camera is orthographic");
-                }
-            }
-        }
-        let yfov = args.yfov.unwrap_or(strata::scene::camera::FRAMING_YFOV_DEGREES).to_radians();
-        let orbit = explicit.then(|| {
-            args.orbit.unwrap_or(Orbit { theta_degrees: 0.0, phi_degrees: DEFAULT_ELEVATION, distance: None })
-        });
-        Ok(Self {
-            places,
-            orbit,
-            direction: strata::scene::camera::FRAMING_DIRECTION.normalize(),
-            target,
-            yfov,
-            bounds: scene.bounds(),
-            aspect,
-        })
-    }
-
-    /// The camera of a frame (turned to azimuth `theta` for a turntable's view); None: keep the scene's.
-    fn camera(&self, theta: Option<f32>) -> Option<strata::scene::Camera> {
-        if !self.places {
-            return None;
-        }
-        let (direction, distance) = match self.orbit {
-            Some(o) => (Orbit { theta_degrees: theta.unwrap_or(o.theta_degrees), ..o }.direction(), o.distance),
-            None => (self.direction, None),
-        };
-        Some(strata::scene::Camera::around(self.bounds, self.target, direction, distance, self.yfov, self.aspect))
-    }
-}
-
-/// `--yfov` on the scene's own (perspective) camera.
-fn apply_yfov(scene: &mut strata::scene::Scene, degrees: Option<f32>) {
-    if let (Some(d), Some(camera)) = (degrees, scene.camera.as_mut()) {
-        if let strata::scene::Projection::Perspective { yfov, .. } = &mut camera.projection {
-            *yfov = d.to_radians();
-        }
-    }
-}
-
-/// The summary line (and JSON) of one written frame.
-#[allow(clippy::too_many_arguments)]
 /// What one finished frame wrote, for its summary line.
 struct FrameReport<'a> {
     output: &'a std::path::Path,
@@ -684,6 +605,7 @@ struct FrameReport<'a> {
     part: Option<(u32, u32)>,
 }
 
+/// The summary line (and JSON) of one written frame.
 fn report(
     args: &RenderArgs,
     settings: &strata::scene::settings::RenderSettings,
@@ -763,26 +685,6 @@ fn exr_layers<'a>(
     let mut layers: Vec<(&str, &strata::output::Frame)> = aovs.iter().map(|(aov, f)| (aov.name(), f)).collect();
     layers.extend(noisy.map(|f| ("noisy", f)));
     layers
-}
-
-/// Denoises a rendered frame in place (its linear radiance and its display image, made as the resolve makes it)
-/// with the albedo and normal a pixel-centre G-buffer pass sees; returns the noisy radiance.
-fn denoise(
-    denoiser: &strata::denoise::Denoiser,
-    gpu: &Gpu,
-    job: &SceneJob,
-    on_gpu: &strata::render::SceneOnGpu,
-    rendered: &mut strata::render::frame::RenderedFrame,
-) -> Result<strata::output::Frame> {
-    let settings = &job.settings;
-    let size = (settings.width, settings.height);
-    let (albedo, normal) = strata::denoise_guides(&gpu.device, &job.scene, on_gpu, size)?;
-    let denoised = denoiser.denoise(&rendered.linear, &albedo, &normal)?;
-    let filmic = settings.tone_map == strata::scene::settings::ToneMap::Filmic;
-    let transparent =
-        settings.backdrop_for(job.scene.environment.is_some()) == strata::scene::settings::Backdrop::Transparent;
-    rendered.display = strata::output::display_rgba8(&denoised, rendered.exposure, filmic, transparent);
-    Ok(std::mem::replace(&mut rendered.linear, denoised))
 }
 
 /// What a render produced: the distributed-ray-traced frame, or the raster preview.

@@ -31,10 +31,7 @@ pub enum Sequence {
     },
 }
 
-/// The shutter of the animation frame at time `t`: open at t for `shutter_angle`/360 of a frame.
-pub fn frame_shutter(t: f32, fps: f32, shutter_angle: f32) -> (f32, f32) {
-    (t, t + shutter_angle / 360.0 / fps)
-}
+use strata::scene::framing::frame_shutter;
 
 /// Every frame of `sequence`, in order.
 pub fn plan(sequence: Sequence, fps: f32, shutter_angle: f32) -> Vec<FramePlan> {

@@ -72,6 +72,15 @@ impl Environment {
         }
     }
 
+    /// The environment a user names: `studio` (the procedural one), else an image file ([`Environment::load`]).
+    pub fn named(name: &Path) -> Result<Self> {
+        if name.as_os_str() == "studio" {
+            Ok(Self::studio(512, 256))
+        } else {
+            Self::load(name)
+        }
+    }
+
     /// A procedural studio: a soft grey dome brightening towards the zenith, a warm key panel high on one side
     /// and a cooler, dimmer fill opposite, over a dark floor. For scenes and tests that need no file.
     pub fn studio(width: u32, height: u32) -> Self {

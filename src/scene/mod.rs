@@ -3,6 +3,7 @@
 pub mod animation;
 pub mod camera;
 pub mod environment;
+pub mod framing;
 pub mod gltf_accessors;
 pub mod gltf_export;
 pub mod gltf_import;
@@ -256,6 +257,26 @@ impl Scene {
         !self.lights.is_empty()
             || self.environment.is_some()
             || self.materials.iter().any(|m| m.emissive.max_element() > 0.0)
+    }
+
+    /// Readies the scene's lighting for a render whose background is `backdrop`: the environment must exist to be
+    /// shown, and a scene with no light at all gets the default key light. Returns the warning to show then.
+    pub fn light_for_render(&mut self, backdrop: Option<settings::Backdrop>) -> anyhow::Result<Option<String>> {
+        if backdrop == Some(settings::Backdrop::Environment) && self.environment.is_none() {
+            anyhow::bail!(
+                "--background environment needs an environment (--environment FILE, [environment] in the scene \
+                 file, or environment= in Python)"
+            );
+        }
+        if self.has_light() {
+            return Ok(None);
+        }
+        self.add_default_light();
+        Ok(Some(
+            "the scene has no lights or emissive surfaces; lighting it with a default key light (add [[light]] \
+             tables in a scene file, or an environment, see docs/scene-format.md)"
+                .to_string(),
+        ))
     }
 
     /// Adds a directional key light from above and behind the camera's left shoulder (irradiance π, so a white

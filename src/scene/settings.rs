@@ -230,6 +230,32 @@ impl RenderSettings {
         self.backdrop.unwrap_or(if has_environment { Backdrop::Environment } else { Backdrop::Colour })
     }
 
+    /// Checks every setting against its range (the command line's and the scene file's parsers check the same
+    /// bounds; a program's settings come here).
+    pub fn check(&self) -> Result<()> {
+        for (side, name) in [(self.width, "width"), (self.height, "height")] {
+            if side == 0 || side > MAX_IMAGE_SIDE {
+                bail!("{name} {side} is outside 1..={MAX_IMAGE_SIDE} pixels");
+            }
+        }
+        if self.spp == 0 || self.spp > MAX_SPP {
+            bail!("spp {} is outside 1..={MAX_SPP}", self.spp);
+        }
+        if self.bounces > MAX_BOUNCES {
+            bail!("bounces {} is above the most, {MAX_BOUNCES}", self.bounces);
+        }
+        if self.shading_samples == 0 || self.shading_samples > MAX_SHADING_SAMPLES {
+            bail!("shading samples {} is outside 1..={MAX_SHADING_SAMPLES}", self.shading_samples);
+        }
+        if !self.exposure.is_finite() || self.exposure.abs() > MAX_EXPOSURE_STOPS {
+            bail!("exposure {} stops is outside ±{MAX_EXPOSURE_STOPS}", self.exposure);
+        }
+        if !self.background.is_finite() || self.background.min_element() < 0.0 {
+            bail!("background {} must be finite and not negative", self.background);
+        }
+        Ok(())
+    }
+
     /// These settings with `overrides` applied on top.
     pub fn with(mut self, overrides: &SettingsOverrides) -> Self {
         let o = overrides.clone();

@@ -159,3 +159,55 @@ impl Drop for GpuTest {
         }
     }
 }
+
+/// A library [`strata::Renderer`] under the validation layer, for the tests of the library API: it takes the
+/// GPU turn like `GpuTest`, and on drop closes the renderer and fails the test on any message the layer reported
+/// (teardown included).
+pub struct RendererTest {
+    renderer: Option<strata::Renderer>,
+    _turn: GpuTurn,
+}
+
+impl RendererTest {
+    pub fn new() -> Self {
+        let turn = GpuTurn::take();
+        let options = strata::RendererOptions {
+            validation: true,
+            device: std::env::var("STRATA_TEST_DEVICE").ok(),
+            ..Default::default()
+        };
+        match strata::Renderer::new(&options) {
+            Ok(renderer) => Self { renderer: Some(renderer), _turn: turn },
+            Err(e) => panic!(
+                "the library tests need the Khronos validation layer and a Vulkan device that traces rays.\n\
+                 Run `sudo scripts/setup.sh` to install them (Mesa's lavapipe works without a GPU).\n\
+                 The error was: {e:#}"
+            ),
+        }
+    }
+}
+
+impl std::ops::Deref for RendererTest {
+    type Target = strata::Renderer;
+    fn deref(&self) -> &strata::Renderer {
+        self.renderer.as_ref().expect("open until dropped")
+    }
+}
+
+impl std::ops::DerefMut for RendererTest {
+    fn deref_mut(&mut self) -> &mut strata::Renderer {
+        self.renderer.as_mut().expect("open until dropped")
+    }
+}
+
+impl Drop for RendererTest {
+    fn drop(&mut self) {
+        let Some(renderer) = self.renderer.take() else { return };
+        let verdict = renderer.close();
+        if !std::thread::panicking() {
+            if let Err(report) = verdict {
+                panic!("{report:#}");
+            }
+        }
+    }
+}
