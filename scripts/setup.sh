@@ -8,6 +8,7 @@
 #     them; bookworm-backports has 25.x)
 #   - libshaderc-dev, glslang-dev, spirv-tools (static archives the build links; see build/shaderc-link)
 #   - pkg-config, a C/C++ toolchain (the shaderc crate builds a small C++ shim)
+#   - python3 with venv and pip: the Python package (`pip install .` in a virtual environment, README)
 #   - with --denoiser: Intel Open Image Denoise for `strata render --denoise`, unpacked from the PyPI wheel pyoidn
 #     (pinned, checksum verified) into /opt/strata/oidn/lib; there is no Debian package. strata loads it at run
 #     time, so builds and tests without it stay green.
@@ -28,7 +29,8 @@ echo "setup: ${PRETTY_NAME:-unknown system}"
 # strata, deploy/container/Dockerfile) takes the Vulkan loader, the layer and vulkaninfo, not the build tools.
 base_pkgs=(libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
            libshaderc-dev glslang-dev glslang-tools spirv-tools
-           pkg-config build-essential ca-certificates)
+           pkg-config build-essential ca-certificates
+           python3 python3-venv python3-pip)
 runtime_only=
 denoiser=
 for arg in "$@"; do

@@ -106,10 +106,10 @@ fn an_empty_tlas_is_a_valid_miss_everywhere() {
     assert!(hits.iter().all(|h| !h.is_hit()), "{hits:?}");
 }
 
-/// Compute pipelines are built once per device and request, shared by every pass that asks again, outlive the
+/// Pipelines (compute and graphics) are built once per device and request, shared by every pass that asks again, outlive the
 /// passes that asked, and go with the device: a later pass uses the kept pipeline cleanly and nothing leaks.
 #[test]
-fn a_device_builds_each_compute_pipeline_once_and_destroys_it_with_itself() {
+fn a_device_builds_each_pipeline_once_and_destroys_it_with_itself() {
     use strata::vk::pipeline::{Binding, Pipeline};
     let gpu = common::GpuTest::ray_queries();
     let device = gpu.device();
@@ -131,6 +131,12 @@ fn a_device_builds_each_compute_pipeline_once_and_destroys_it_with_itself() {
     assert_ne!(wider.raw, first.raw);
     drop((first, again, wider));
     assert_eq!(kept(), before + 2, "dropping the passes' handles leaves the device's pipelines");
+    // The G-buffer's graphics pipeline too: every render builds its pass, the device builds the pipeline once.
+    let gbuffer = strata::render::gbuffer::GBufferPass::new(device).unwrap();
+    assert_eq!(kept(), before + 3, "the first G-buffer pass builds its pipeline");
+    drop(gbuffer);
+    drop(strata::render::gbuffer::GBufferPass::new(device).unwrap());
+    assert_eq!(kept(), before + 3, "a second G-buffer pass builds nothing new");
 
     // A pass whose pipeline an earlier, dropped pass asked for first still casts rays.
     let tlas = AccelerationStructure::build_tlas(device, "empty TLAS", &[]).unwrap();

@@ -95,6 +95,21 @@ impl Aov {
         Aov::NAMES[self as usize]
     }
 
+    /// How many of a raw frame's four channels hold the AOV (the rest pad): what an array of it keeps.
+    pub fn channels(self) -> usize {
+        match self {
+            Aov::Depth | Aov::Height | Aov::Instance | Aov::Semantic => 1,
+            Aov::Motion => 2,
+            Aov::Normal | Aov::GeometricNormal | Aov::Albedo | Aov::Position | Aov::Emission => 3,
+            Aov::Material => 4,
+        }
+    }
+
+    /// Labels (node index + 1, class id): whole numbers, held as floats in a frame, as integers in an array.
+    pub fn is_label(self) -> bool {
+        matches!(self, Aov::Instance | Aov::Semantic)
+    }
+
     /// Colour AOVs are encoded as sRGB in a PNG; the others are data.
     pub fn is_color(self) -> bool {
         matches!(self, Aov::Albedo | Aov::Emission)

@@ -13,6 +13,9 @@ pub(super) struct PipelineKey {
     pub(super) bindings: Vec<(u32, vk::DescriptorType, u32, bool)>,
     pub(super) push_constant_size: u32,
     pub(super) constants: Vec<u32>,
+    /// A graphics pipeline's fixed-function state (vertex layout, attachment formats, blending, culling), as
+    /// words; empty for compute and ray tracing.
+    pub(super) fixed_function: Vec<u32>,
 }
 
 #[derive(Clone, Copy)]
@@ -22,7 +25,7 @@ pub(super) struct KeptHandles {
     pub(super) set_layout: vk::DescriptorSetLayout,
 }
 
-/// The compute and ray-tracing pipelines a device keeps until it is destroyed. Building one is the costly part
+/// The pipelines a device keeps until it is destroyed. Building one is the costly part
 /// of a pass on lavapipe even when Mesa's shader disk cache holds its code (the accumulation pipeline: about
 /// 0.8 s, 2 s under the validation layer; docs/performance.md), and every render builds its passes anew; kept, a
 /// program that renders many frames on one device (an animation, the benchmark, the test suite) builds each

@@ -83,6 +83,26 @@ pub struct GraphicsDesc<'a> {
     pub cull_mode: vk::CullModeFlags,
 }
 
+impl GraphicsDesc<'_> {
+    /// The fixed-function state as words, for the key a kept pipeline is found by.
+    fn fixed_function_words(&self) -> Vec<u32> {
+        let mut words = Vec::new();
+        for b in self.vertex_bindings {
+            words.extend([b.binding, b.stride, b.input_rate.as_raw() as u32]);
+        }
+        words.push(u32::MAX);
+        for a in self.vertex_attributes {
+            words.extend([a.location, a.binding, a.format.as_raw() as u32, a.offset]);
+        }
+        words.push(u32::MAX);
+        words.extend(self.color_formats.iter().map(|f| f.as_raw() as u32));
+        words.push(u32::MAX);
+        words.push(self.depth_format.map_or(u32::MAX - 1, |f| f.as_raw() as u32));
+        words.extend([u32::from(self.additive_blend), self.cull_mode.as_raw()]);
+        words
+    }
+}
+
 impl Pipeline {
     fn new_layout(
         device: &Arc<Device>,
@@ -173,6 +193,7 @@ impl Pipeline {
             bindings: bindings.iter().map(|b| (b.binding, b.kind, b.count, b.variable)).collect(),
             push_constant_size,
             constants: constants.to_vec(),
+            fixed_function: Vec::new(),
         };
         Self::kept(device, key, bindings, |device, layout, specialization| {
             let module = ShaderModule::new(device, shader.0, shader.1)?;
@@ -207,6 +228,7 @@ impl Pipeline {
             bindings: desc.bindings.iter().map(|b| (b.binding, b.kind, b.count, b.variable)).collect(),
             push_constant_size: desc.push_constant_size,
             constants: desc.constants.to_vec(),
+            fixed_function: Vec::new(),
         };
         Self::kept(device, key, desc.bindings, |device, layout, specialization| {
             let kinds = [
@@ -318,22 +340,28 @@ impl Pipeline {
         })
     }
 
-    /// A graphics pipeline for dynamic rendering.
+    /// A graphics pipeline for dynamic rendering. Kept by the device like compute pipelines: every render builds
+    /// its G-buffer pass, and a program that renders many frames (the library's `Renderer`) builds it once.
     pub fn graphics(device: &Arc<Device>, desc: &GraphicsDesc<'_>) -> Result<Self> {
+        let key = PipelineKey {
+            name: desc.name.to_owned(),
+            bind_point: vk::PipelineBindPoint::GRAPHICS,
+            spirv: vec![desc.vertex.1.to_vec(), desc.fragment.1.to_vec()],
+            bindings: desc.bindings.iter().map(|b| (b.binding, b.kind, b.count, b.variable)).collect(),
+            push_constant_size: desc.push_constant_size,
+            constants: Vec::new(),
+            fixed_function: desc.fixed_function_words(),
+        };
+        Self::kept(device, key, desc.bindings, |device, layout, _| Self::build_graphics(device, desc, layout))
+    }
+
+    fn build_graphics(
+        device: &Arc<Device>,
+        desc: &GraphicsDesc<'_>,
+        layout: vk::PipelineLayout,
+    ) -> Result<vk::Pipeline> {
         let vertex = ShaderModule::new(device, desc.vertex.0, desc.vertex.1)?;
         let fragment = ShaderModule::new(device, desc.fragment.0, desc.fragment.1)?;
-        let (set_layout, layout) = Self::new_layout(device, desc.name, desc.bindings, desc.push_constant_size)?;
-        let mut pipeline = Self {
-            raw: vk::Pipeline::null(),
-            layout,
-            set_layout,
-            bind_point: vk::PipelineBindPoint::GRAPHICS,
-            bindings: desc.bindings.to_vec(),
-            push_constant_size: desc.push_constant_size,
-            name: desc.name.to_owned(),
-            kept_by_device: false,
-            device: device.clone(),
-        };
         let stages = [
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
@@ -393,11 +421,10 @@ impl Pipeline {
             .dynamic_state(&dynamic)
             .layout(layout)
             .push_next(&mut rendering)];
-        pipeline.raw = unsafe { device.raw.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
+        unsafe { device.raw.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) }
             .map_err(|(_, e)| anyhow!(e))
-            .with_context(|| format!("vkCreateGraphicsPipelines {}", desc.name))?[0];
-        device.set_name(pipeline.raw, desc.name);
-        Ok(pipeline)
+            .with_context(|| format!("vkCreateGraphicsPipelines {}", desc.name))
+            .map(|p| p[0])
     }
 
     /// A descriptor set for this pipeline's layout, from a pool of its own (a variable-size array, if any, at
