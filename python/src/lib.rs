@@ -419,6 +419,31 @@ impl Scene {
         self.inner.set_lights(lights).map_err(to_py)
     }
 
+    /// Sets a perspective camera: its pose (4x4 rows, glTF axes: looking down its -Z, +Y up), vertical field of
+    /// view in degrees, clip planes in metres (zfar None: infinite) and thin lens (aperture radius 0: pinhole).
+    #[pyo3(signature = (world_from_camera, *, yfov = 45.0, znear = 0.01, zfar = None, aperture = 0.0, focus = 1.0))]
+    fn set_camera(
+        &mut self,
+        world_from_camera: Vec<Vec<f32>>,
+        yfov: f32,
+        znear: f32,
+        zfar: Option<f32>,
+        aperture: f32,
+        focus: f32,
+    ) -> PyResult<()> {
+        if world_from_camera.len() != 4 || world_from_camera.iter().any(|r| r.len() != 4) {
+            return Err(bad("a camera pose is 4 rows of 4 numbers".into()));
+        }
+        let rows: Vec<f32> = world_from_camera.into_iter().flatten().collect();
+        let camera = strata::scene::Camera {
+            name: "Python camera".into(),
+            world_from_camera: glam::Mat4::from_cols_slice(&rows).transpose(),
+            projection: strata::scene::Projection::Perspective { yfov: yfov.to_radians(), znear, zfar },
+            lens: strata::scene::camera::Lens { aperture_radius: aperture, focus_distance: focus },
+        };
+        self.inner.set_camera(Some(camera)).map_err(to_py)
+    }
+
     /// Removes every light (emissive surfaces and the environment stay).
     fn clear_lights(&mut self) -> PyResult<()> {
         self.inner.set_lights(Vec::new()).map_err(to_py)

@@ -97,6 +97,24 @@ class Scene:
         """Adds a light travelling along `direction` with irradiance `irradiance` (linear RGB, W/m²)."""
         self._native.add_directional_light([float(v) for v in direction], [float(v) for v in irradiance])
 
+    def set_camera(
+        self,
+        world_from_camera: Any,
+        *,
+        yfov: float = 45.0,
+        znear: float = 0.01,
+        zfar: Optional[float] = None,
+        aperture: float = 0.0,
+        focus: float = 1.0,
+    ) -> None:
+        """Sets a perspective camera: its 4x4 pose (glTF axes: it looks down its -Z with +Y up), the vertical field
+        of view in degrees, clip planes in metres (zfar None: infinite), and a thin lens (aperture radius in
+        metres, 0 a pinhole; focus distance in metres). A render's orbit or target still places its own."""
+        m = np.asarray(world_from_camera, dtype=np.float32)
+        if m.shape != (4, 4):
+            raise ValueError(f"a camera pose is a 4x4 matrix, not shape {m.shape}")
+        self._native.set_camera(m.tolist(), yfov=yfov, znear=znear, zfar=zfar, aperture=aperture, focus=focus)
+
     def clear_lights(self) -> None:
         """Removes the lights (emissive surfaces and the environment stay; with none, a default key light)."""
         self._native.clear_lights()

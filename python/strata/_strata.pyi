@@ -31,6 +31,16 @@ class Scene:
         self, environment: Optional[str], *, rotation: Optional[float] = ..., intensity: Optional[float] = ...
     ) -> None: ...
     def add_directional_light(self, direction: List[float], irradiance: List[float]) -> None: ...
+    def set_camera(
+        self,
+        world_from_camera: List[List[float]],
+        *,
+        yfov: float = ...,
+        znear: float = ...,
+        zfar: Optional[float] = ...,
+        aperture: float = ...,
+        focus: float = ...,
+    ) -> None: ...
     def clear_lights(self) -> None: ...
 
 class Renderer:

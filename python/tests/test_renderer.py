@@ -87,6 +87,28 @@ def test_k_reprojects_each_quad_centre_onto_its_label(renderer, quads):
         assert frame["instance"][py, px] == scene.node_names.index(name) + 1, (name, px, py)
 
 
+def test_a_camera_set_from_python_is_the_one_rendered(renderer, quads):
+    scene = renderer.load(quads)
+    eye = np.array([0.3, 1.5, 1.2])
+    forward = -eye / np.linalg.norm(eye)
+    right = np.cross(forward, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    pose = np.eye(4)
+    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = right, up, -forward, eye
+    scene.set_camera(pose, yfov=50)
+    frame = renderer.render(scene, size=(64, 48), spp=1, aovs=["instance"])
+    camera = frame["camera"]
+    assert np.allclose(np.asarray(camera["world_from_camera"]), pose, atol=1e-6)
+    assert camera["yfov"] == pytest.approx(np.radians(50))
+    k, camera_from_world = np.asarray(camera["K"]), np.asarray(camera["camera_from_world_opencv"])
+    for name, x in (("left", -0.5), ("right", 0.5)):
+        u, v, w = k @ (camera_from_world @ np.array([x, 0.0, 0.0, 1.0]))[:3]
+        assert frame["instance"][int(v / w), int(u / w)] == scene.node_names.index(name) + 1, name
+    with pytest.raises(ValueError, match="yfov"):
+        scene.set_camera(pose, yfov=200)
+
+
 def read_png_rgba8(path):
     """An 8-bit RGBA, non-interlaced PNG's pixels (what strata writes), decoded with zlib alone."""
     data = pathlib.Path(path).read_bytes()

@@ -150,9 +150,43 @@ impl Scene {
         Ok(())
     }
 
-    /// Sets the camera (None: the scene's bounds framed, unless a render places one).
-    pub fn set_camera(&mut self, camera: Option<Camera>) {
+    /// Sets the camera (None: the scene's bounds framed, unless a render places one). Its pose must be finite and
+    /// affine, a perspective field of view between 0 and 180 degrees, the clip planes ordered and positive.
+    pub fn set_camera(&mut self, camera: Option<Camera>) -> Result<()> {
+        if let Some(c) = &camera {
+            let bad = |what: &str| -> anyhow::Error { InputError::new(format!("camera {:?}: {what}", c.name)).into() };
+            if !c.world_from_camera.is_finite() || c.world_from_camera.row(3) != Vec4::W {
+                return Err(bad("world_from_camera must be finite and affine (last row 0 0 0 1)"));
+            }
+            if c.world_from_camera.determinant().abs() < 1e-12 {
+                return Err(bad("world_from_camera must be invertible"));
+            }
+            let (near, far) = match c.projection {
+                scene::Projection::Perspective { yfov, znear, zfar } => {
+                    if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+                        return Err(bad("yfov must be between 0 and 180 degrees"));
+                    }
+                    (znear, zfar)
+                }
+                scene::Projection::Orthographic { xmag, ymag, znear, zfar } => {
+                    if !(xmag > 0.0 && ymag > 0.0 && xmag.is_finite() && ymag.is_finite()) {
+                        return Err(bad("xmag and ymag must be positive"));
+                    }
+                    (znear, Some(zfar))
+                }
+            };
+            if !(near > 0.0 && near.is_finite()) || far.is_some_and(|f| !(f > near && f.is_finite())) {
+                return Err(bad("znear must be positive and zfar beyond it"));
+            }
+            let lens = c.lens;
+            let aperture_ok = lens.aperture_radius >= 0.0 && lens.aperture_radius.is_finite();
+            let focus_ok = lens.focus_distance > 0.0 && lens.focus_distance.is_finite();
+            if !(aperture_ok && focus_ok) {
+                return Err(bad("the aperture must be 0 or more and the focus distance positive"));
+            }
+        }
         self.scene.camera = camera;
+        Ok(())
     }
 
     /// Sets the environment (None: none); a renderer uploads a changed environment before the next render.
