@@ -379,7 +379,7 @@ fn assert_renders_alike_in_both_modes(gpu: &GpuTest, textured: &Scene, factors: 
 /// A second frame on the same device builds no pipeline of its own (the device keeps them) and is the first
 /// frame bit for bit.
 #[test]
-fn a_second_frame_on_one_device_reuses_the_compute_pipelines_and_matches_the_first() {
+fn a_second_frame_on_one_device_reuses_the_pipelines_and_matches_the_first() {
     let gpu = GpuTest::new();
     let scene = load(&repo("scenes/cornell.toml"));
     let s = settings(48, 32, 2, SamplerKind::Jittered);
