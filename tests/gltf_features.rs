@@ -724,3 +724,119 @@ fn material_variants_pick_each_primitives_material() {
     let error = format!("{:#}", material(&file, None).unwrap_err());
     assert!(error.contains("KHR_materials_variants mapping") && error.contains("material 9"), "{error}");
 }
+
+/// A quad whose positions (EXPONENTIAL filter), normals (8-bit OCTAHEDRAL filter, KHR_mesh_quantization) and
+/// indices (TRIANGLES) are `compressed` with EXT_meshopt_compression into a fallback buffer, or stored plain
+/// (the twin) with the values the filters decode to, worked out by hand from the extension's formulas: mantissa ×
+/// 2^exponent; an octahedral (x, y, 127) with z = 127 − |x| − |y| folded where negative, rescaled to length 127.
+fn meshopt_quad(compressed: bool) -> (Value, Vec<u8>) {
+    use meshopt_rs::index::buffer::{encode_index_buffer, encode_index_buffer_bound};
+    use meshopt_rs::vertex::buffer::{encode_vertex_buffer, encode_vertex_buffer_bound};
+    let exp = |mantissa: i32, exponent: i8| ((exponent as u8 as u32) << 24) | (mantissa as u32 & 0x00ff_ffff);
+    // (0.5, −1.25, 3), (2, 0, −0.75), (−3, 1, 0.125), (0, 0, 6).
+    let positions_exp: [[u32; 3]; 4] = [
+        [exp(1, -1), exp(-5, -2), exp(3, 0)],
+        [exp(1, 1), exp(0, 0), exp(-3, -2)],
+        [exp(-3, 0), exp(1, 0), exp(1, -3)],
+        [exp(0, 0), exp(0, 0), exp(3, 1)],
+    ];
+    let positions = [[0.5f32, -1.25, 3.0], [2.0, 0.0, -0.75], [-3.0, 1.0, 0.125], [0.0, 0.0, 6.0]];
+    // +X, +Y, +Z and −Z in the octahedral encoding (the fourth byte is kept), then as decoded.
+    let normals_oct: [[u8; 4]; 4] = [[127, 0, 127, 0], [0, 127, 127, 0], [0, 0, 127, 0], [127, 127, 127, 0]];
+    let normals: [[i8; 4]; 4] = [[127, 0, 0, 0], [0, 127, 0, 0], [0, 0, 127, 0], [0, 0, -127, 0]];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let plain_positions = bytes_f32(&positions.concat());
+    let plain_normals: Vec<u8> = normals.iter().flatten().map(|&v| v as u8).collect();
+    let plain_indices: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+    let mut doc = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scenes": [{"nodes": [0]}], "scene": 0,
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}, "indices": 2}]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-3, -1.25, -0.75], "max": [2, 1, 6]},
+            {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],
+    });
+    if !compressed {
+        let mut bin = plain_positions;
+        bin.extend(&plain_normals);
+        bin.extend(&plain_indices);
+        doc["bufferViews"] = json!([
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48, "byteStride": 12},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 16, "byteStride": 4},
+            {"buffer": 0, "byteOffset": 64, "byteLength": 12},
+        ]);
+        doc["buffers"] = json!([{"byteLength": bin.len()}]);
+        return (doc, bin);
+    }
+    let mut encoded = vec![0u8; encode_vertex_buffer_bound(4, 12)];
+    let n = encode_vertex_buffer(&mut encoded, &positions_exp, Default::default()).unwrap();
+    let mut bin = encoded[..n].to_vec();
+    let positions_len = bin.len();
+    let mut encoded = vec![0u8; encode_vertex_buffer_bound(4, 4)];
+    let n = encode_vertex_buffer(&mut encoded, &normals_oct, Default::default()).unwrap();
+    bin.extend(&encoded[..n]);
+    let normals_len = bin.len() - positions_len;
+    let mut encoded = vec![0u8; encode_index_buffer_bound(6, 4)];
+    let as_u32: Vec<u32> = indices.iter().map(|&i| u32::from(i)).collect();
+    let n = encode_index_buffer(&mut encoded, &as_u32, Default::default()).unwrap();
+    bin.extend(&encoded[..n]);
+    let indices_len = bin.len() - positions_len - normals_len;
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let ext = |offset: usize, length: usize, stride: usize, count: usize, mode: &str, filter: &str| {
+        json!({"EXT_meshopt_compression": {"buffer": 0, "byteOffset": offset, "byteLength": length,
+            "byteStride": stride, "count": count, "mode": mode, "filter": filter}})
+    };
+    doc["bufferViews"] = json!([
+        {"buffer": 1, "byteOffset": 0, "byteLength": 48, "byteStride": 12,
+         "extensions": ext(0, positions_len, 12, 4, "ATTRIBUTES", "EXPONENTIAL")},
+        {"buffer": 1, "byteOffset": 48, "byteLength": 16, "byteStride": 4,
+         "extensions": ext(positions_len, normals_len, 4, 4, "ATTRIBUTES", "OCTAHEDRAL")},
+        {"buffer": 1, "byteOffset": 64, "byteLength": 12,
+         "extensions": ext(positions_len + normals_len, indices_len, 2, 6, "TRIANGLES", "NONE")},
+    ]);
+    doc["buffers"] = json!([
+        {"byteLength": bin.len()},
+        {"byteLength": 76, "extensions": {"EXT_meshopt_compression": {"fallback": true}}},
+    ]);
+    doc["extensionsUsed"] = json!(["KHR_mesh_quantization", "EXT_meshopt_compression"]);
+    doc["extensionsRequired"] = json!(["KHR_mesh_quantization", "EXT_meshopt_compression"]);
+    (doc, bin)
+}
+
+/// EXT_meshopt_compression: the compressed quad loads as its plain twin, vertex for vertex and index for index,
+/// with the values the extension's filters define; a filter strata lacks and a fallback buffer too large to
+/// allocate are errors that name the extension.
+#[test]
+fn a_meshopt_compressed_mesh_loads_as_its_plain_twin() {
+    let dir = temp_dir("meshopt");
+    let load = |name: &str, (doc, bin): (Value, Vec<u8>)| {
+        let path = dir.join(name);
+        std::fs::write(&path, glb(&doc, &bin)).unwrap();
+        strata::load_scene(&path)
+    };
+    let compressed = load("compressed.glb", meshopt_quad(true)).expect("the compressed file loads");
+    let twin = load("twin.glb", meshopt_quad(false)).expect("its plain twin loads");
+    assert!(compressed.warnings.is_empty(), "{:?}", compressed.warnings);
+    let (c, t) = (&compressed.meshes[0].primitives[0], &twin.meshes[0].primitives[0]);
+    assert_eq!((&c.positions, &c.normals, &c.indices), (&t.positions, &t.normals, &t.indices));
+    assert_eq!(c.positions[0], Vec3::new(0.5, -1.25, 3.0));
+    assert_eq!(c.positions[3], Vec3::new(0.0, 0.0, 6.0));
+    assert_eq!(c.normals, [Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_Z]);
+    assert_eq!(c.indices, [0, 1, 2, 0, 2, 3]);
+
+    let (mut doc, bin) = meshopt_quad(true);
+    doc["bufferViews"][1]["extensions"]["EXT_meshopt_compression"]["filter"] = json!("QUATERNION");
+    let error = format!("{:#}", load("quaternion.glb", (doc, bin)).unwrap_err());
+    assert!(error.contains("EXT_meshopt_compression") && error.contains("QUATERNION"), "{error}");
+    let (mut doc, bin) = meshopt_quad(true);
+    doc["buffers"][1]["byteLength"] = json!(1u64 << 40);
+    let error = format!("{:#}", load("huge.glb", (doc, bin)).unwrap_err());
+    assert!(error.contains("fallback") && error.contains("at most"), "{error}");
+}

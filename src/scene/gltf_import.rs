@@ -13,8 +13,9 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 12] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 13] = [
     "EXT_mesh_gpu_instancing",
+    "EXT_meshopt_compression",
     "EXT_texture_webp",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
@@ -60,7 +61,8 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
             scene.warnings.push(format!("optional extension {ext} is not supported; rendering without it"));
         }
     }
-    let buffers = load_buffers(document, gltf.blob.as_deref(), base_dir, options.uri_policy)?;
+    let mut buffers = load_buffers(document, gltf.blob.as_deref(), base_dir, options.uri_policy)?;
+    super::gltf_meshopt::decode_views(document, &mut buffers)?;
     let images = load_images(document, &buffers, base_dir, options.uri_policy);
     (scene.textures, scene.images) = textures(document, images, &mut scene.warnings)?;
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
@@ -270,6 +272,10 @@ fn load_buffers(
     document
         .buffers()
         .map(|buffer| {
+            // EXT_meshopt_compression's fallback buffer holds only what compressed views decode into.
+            if let Some(bytes) = super::gltf_meshopt::fallback_bytes(&buffer) {
+                return bytes;
+            }
             let data = match buffer.source() {
                 gltf::buffer::Source::Bin => blob.map(<[u8]>::to_vec).ok_or_else(|| {
                     anyhow!("buffer {} refers to the .glb binary chunk, which is missing", buffer.index())

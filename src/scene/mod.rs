@@ -10,6 +10,7 @@ pub mod gltf_import;
 mod gltf_instancing;
 mod gltf_material;
 mod gltf_mesh;
+mod gltf_meshopt;
 pub mod gltf_uri;
 pub mod image_decode;
 pub mod library;
