@@ -2,8 +2,9 @@
 //! view names its compressed bytes (buffer, offset, length) and how to decode them (mode ATTRIBUTES, TRIANGLES or
 //! INDICES; filter NONE, OCTAHEDRAL or EXPONENTIAL); the decoded bytes go where the view itself points, usually a
 //! "fallback" buffer with no data of its own. Accessors then read them as any view. The codecs are the pure-Rust
-//! port `meshopt-rs`; the filters, applied after the codec, are its ports of meshoptimizer's scalar reference code.
-//! The QUATERNION filter (animation rotations) is refused by name: the port's differs from the extension's.
+//! port `meshopt-rs`; the octahedral and exponential filters, applied after the codec, are its ports of
+//! meshoptimizer's scalar reference code. The quaternion filter is written here from the extension's Appendix B:
+//! the port's reads the components as unsigned and predates the extension's formulation.
 use anyhow::{anyhow, bail, Result};
 use serde::Deserialize;
 
@@ -163,8 +164,57 @@ fn filter(name: &str, stride: usize, data: &mut [u8]) -> Result<()> {
                 out.copy_from_slice(&w.to_le_bytes());
             }
         }
-        "QUATERNION" => bail!("the QUATERNION filter is not supported yet (animation rotations compressed by it)"),
+        "QUATERNION" => {
+            if stride != 8 {
+                bail!("the QUATERNION filter needs a byteStride of 8, not {stride}");
+            }
+            for v in data.chunks_exact_mut(8) {
+                let input: [i16; 4] = std::array::from_fn(|k| i16::from_le_bytes([v[2 * k], v[2 * k + 1]]));
+                for (k, c) in decode_quaternion(input).iter().enumerate() {
+                    v[2 * k..2 * k + 2].copy_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
         other => bail!("unknown filter {other:?} (NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL)"),
     }
     Ok(())
+}
+
+/// One quaternion of the QUATERNION filter (EXT_meshopt_compression, Appendix B, filter 2): three components
+/// scaled by √2 as signed normalized integers, the fourth holding 1.0 at the same bit count with the index of the
+/// omitted largest component in its two low bits; out come four 16-bit normalized components.
+fn decode_quaternion(input: [i16; 4]) -> [i16; 4] {
+    let range = std::f32::consts::FRAC_1_SQRT_2;
+    let one = f32::from(input[3] | 3);
+    let [x, y, z] = [0, 1, 2].map(|k| f32::from(input[k]) / one * range);
+    let w = (1.0 - x * x - y * y - z * z).max(0.0).sqrt();
+    // C's round: half away from zero, as Rust's f32::round.
+    let snorm = |v: f32| (v * 32767.0).round() as i16;
+    let largest = (input[3] & 3) as usize;
+    let mut output = [0i16; 4];
+    output[(largest + 1) % 4] = snorm(x);
+    output[(largest + 2) % 4] = snorm(y);
+    output[(largest + 3) % 4] = snorm(z);
+    output[largest] = snorm(w);
+    output
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Worked by hand from Appendix B: the identity (largest w, index 3) and a quarter turn about +Y (largest y,
+    /// index 1, so the inputs are z, w, x in that cyclic order, w = √½ stored as √½·√2 = 1.0), and a negative
+    /// component, which the port's unsigned reading gets wrong.
+    #[test]
+    fn quaternions_decode_as_the_extension_specifies() {
+        assert_eq!(decode_quaternion([0, 0, 0, 32767]), [0, 0, 0, 32767]);
+        assert_eq!(decode_quaternion([0, 32767, 0, (32767 & !3) | 1]), [0, 23170, 0, 23170]);
+        // −½ on x with w largest: x = −16384/32767·√½ = −0.35356, w = √(1 − x²) = 0.93541.
+        assert_eq!(decode_quaternion([-16384, 0, 0, 32767]), [-11585, 0, 0, 30651]);
+        let mut bytes: Vec<u8> = [0i16, 32767, 0, (32767 & !3) | 1].iter().flat_map(|c| c.to_le_bytes()).collect();
+        filter("QUATERNION", 8, &mut bytes).unwrap();
+        assert_eq!(bytes, [0i16, 23170, 0, 23170].iter().flat_map(|c| c.to_le_bytes()).collect::<Vec<_>>());
+        assert!(filter("QUATERNION", 4, &mut [0; 4]).unwrap_err().to_string().contains("byteStride of 8"));
+    }
 }
