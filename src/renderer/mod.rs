@@ -1,6 +1,23 @@
 //! The library's front door: a [`Renderer`] a program holds (the device, its pipelines, each scene's uploads)
 //! and [`Scene`]s it loads once and changes between renders. `strata render` and the Python package are built
 //! on it (docs/architecture.md, "Library API").
+//!
+//! ```no_run
+//! # fn main() -> anyhow::Result<()> {
+//! use strata::render::aov::Aov;
+//! let mut renderer = strata::Renderer::new(&strata::RendererOptions::default())?;
+//! let mut scene = strata::Scene::load("scenes/cornell.toml".as_ref(), &Default::default())?;
+//! let request = strata::RenderRequest { aovs: vec![Aov::Depth, Aov::Instance], ..Default::default() };
+//! let first = renderer.render(&mut scene, &request, &mut |_, _| true)?;
+//! // Move a node and render again: nothing is uploaded twice.
+//! let node = scene.node_index("tall box")?;
+//! let moved = glam::Mat4::from_translation(glam::Vec3::X * 0.1) * scene.node_transform(node)?;
+//! scene.set_node_transform(node, moved)?;
+//! let second = renderer.render(&mut scene, &request, &mut |_, _| true)?;
+//! assert_eq!(first.color.width, second.color.width);
+//! renderer.close()
+//! # }
+//! ```
 mod request;
 mod scene;
 
