@@ -175,7 +175,7 @@ impl Renderer {
     ) -> Result<Rendered> {
         let settings = request.settings_over(&scene.file_settings)?;
         let environment = self.request_environment(request)?;
-        let kept = Kept::of(&scene.scene);
+        let kept = Kept::of(&scene.scene, request);
         let warnings = prepare(&mut scene.scene, request, &settings, environment).map_err(InputError::from);
         let rendered = match warnings {
             Ok(warnings) => self.render_prepared(scene, request, settings, warnings, progress),
@@ -288,16 +288,20 @@ struct Kept {
     camera: Option<crate::scene::Camera>,
     shutter: (f32, f32),
     lights: usize,
-    environment: Option<Environment>,
+    /// The scene's environment, kept only when the request changes it (its texels are the one large part).
+    environment: Option<Option<Environment>>,
 }
 
 impl Kept {
-    fn of(scene: &crate::scene::Scene) -> Self {
+    fn of(scene: &crate::scene::Scene, request: &RenderRequest) -> Self {
+        let changes_environment = request.environment.is_some()
+            || request.environment_rotation.is_some()
+            || request.environment_intensity.is_some();
         Self {
             camera: scene.camera.clone(),
             shutter: scene.shutter,
             lights: scene.lights.len(),
-            environment: scene.environment.clone(),
+            environment: changes_environment.then(|| scene.environment.clone()),
         }
     }
 
@@ -305,6 +309,8 @@ impl Kept {
         scene.camera = self.camera;
         scene.shutter = self.shutter;
         scene.lights.truncate(self.lights);
-        scene.environment = self.environment;
+        if let Some(environment) = self.environment {
+            scene.environment = environment;
+        }
     }
 }
