@@ -176,6 +176,24 @@ def test_python_and_the_command_line_give_the_same_pixels(renderer, tmp_path):
     assert np.array_equal(read_png_rgba8(png), frame["display"])
 
 
+def test_a_frame_at_a_time_matches_the_command_lines_time(renderer, tmp_path):
+    """--time t opens the shutter at t for half a frame at 24 fps; time=t does the same, to the byte."""
+    scene_path = REPO / "scenes" / "motion.toml"
+    png = tmp_path / "motion.png"
+    cli = subprocess.run(
+        [strata_cli(), "render", str(scene_path), "--size", "32x24", "--spp", "4", "--time", "0.5",
+         "-o", str(png), "--quiet"],
+        capture_output=True, text=True,
+    )
+    assert cli.returncode == 0, cli.stderr
+    scene = renderer.load(scene_path)
+    frame = renderer.render(scene, size=(32, 24), spp=4, time=0.5)
+    assert frame["camera"]["time"] == 0.5
+    assert np.array_equal(read_png_rgba8(png), frame["display"])
+    still = renderer.render(scene, size=(32, 24), spp=4)
+    assert not np.array_equal(still["display"], frame["display"]), "the scene moves between its shutter and t = 0.5"
+
+
 def test_bad_input_is_a_value_error_that_names_the_problem(renderer, quads, tmp_path):
     with pytest.raises(ValueError, match="no/such/scene.gltf"):
         renderer.load("no/such/scene.gltf")
