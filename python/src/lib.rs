@@ -48,7 +48,7 @@ struct Scene {
 }
 
 /// The options of one render, as Python passes them (None: the scene file's setting, else strata's default).
-#[derive(FromPyObject, Default)]
+#[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 struct RenderOptions {
     size: Option<(u32, u32)>,
@@ -304,6 +304,15 @@ impl Renderer {
     }
 }
 
+/// A 4x4 matrix given as Python rows; `what` names it in the error.
+fn mat4_from_rows(rows: Vec<Vec<f32>>, what: &str) -> PyResult<glam::Mat4> {
+    if rows.len() != 4 || rows.iter().any(|r| r.len() != 4) {
+        return Err(bad(format!("{what} is 4 rows of 4 numbers")));
+    }
+    let flat: Vec<f32> = rows.into_iter().flatten().collect();
+    Ok(glam::Mat4::from_cols_slice(&flat).transpose())
+}
+
 fn node_of(scene: &strata::Scene, node: &Bound<'_, PyAny>) -> PyResult<usize> {
     if let Ok(name) = node.extract::<String>() {
         return scene.node_index(&name).map_err(to_py);
@@ -349,11 +358,7 @@ impl Scene {
     /// Sets a node's local transform (4x4 rows): it moves in the next render, with no reload.
     fn set_node_transform(&mut self, node: &Bound<'_, PyAny>, matrix: Vec<Vec<f32>>) -> PyResult<()> {
         let index = node_of(&self.inner, node)?;
-        if matrix.len() != 4 || matrix.iter().any(|r| r.len() != 4) {
-            return Err(bad("a transform is 4 rows of 4 numbers".into()));
-        }
-        let rows: Vec<f32> = matrix.into_iter().flatten().collect();
-        let m = glam::Mat4::from_cols_slice(&rows).transpose();
+        let m = mat4_from_rows(matrix, "a transform")?;
         self.inner.set_node_transform(index, m).map_err(to_py)
     }
 
@@ -431,13 +436,9 @@ impl Scene {
         aperture: f32,
         focus: f32,
     ) -> PyResult<()> {
-        if world_from_camera.len() != 4 || world_from_camera.iter().any(|r| r.len() != 4) {
-            return Err(bad("a camera pose is 4 rows of 4 numbers".into()));
-        }
-        let rows: Vec<f32> = world_from_camera.into_iter().flatten().collect();
         let camera = strata::scene::Camera {
             name: "Python camera".into(),
-            world_from_camera: glam::Mat4::from_cols_slice(&rows).transpose(),
+            world_from_camera: mat4_from_rows(world_from_camera, "a camera pose")?,
             projection: strata::scene::Projection::Perspective { yfov: yfov.to_radians(), znear, zfar },
             lens: strata::scene::camera::Lens { aperture_radius: aperture, focus_distance: focus },
         };

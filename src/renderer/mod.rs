@@ -139,6 +139,12 @@ impl Renderer {
     /// `scene`'s uploads: made by its first render, kept while it lives; its environment uploaded again when it
     /// changed. Uploads of scenes that were dropped are freed here.
     pub fn upload(&mut self, scene: &Scene) -> Result<&SceneOnGpu> {
+        let index = self.upload_index(scene)?;
+        Ok(&self.uploads[index].on_gpu)
+    }
+
+    /// Where `scene`'s upload sits in `uploads`, made or refreshed as [`Renderer::upload`] says.
+    fn upload_index(&mut self, scene: &Scene) -> Result<usize> {
         self.uploads.retain(|u| u.alive.strong_count() > 0);
         let device = &self.gpu.device;
         let index = match self.uploads.iter().position(|u| u.scene_id == scene.id) {
@@ -161,7 +167,7 @@ impl Renderer {
             upload.on_gpu.environment = crate::render::environment::upload(device, scene.scene.environment.as_ref())?;
             upload.environment = scene.scene.environment.clone();
         }
-        Ok(&self.uploads[index].on_gpu)
+        Ok(index)
     }
 
     /// Renders `scene` as `request` asks. The scene comes back as it was: the request's camera, environment,
@@ -212,8 +218,8 @@ impl Renderer {
         if request.denoise && self.denoiser.is_none() {
             self.denoiser = Some(crate::denoise::Denoiser::load()?);
         }
-        self.upload(scene)?;
-        let on_gpu = &self.uploads.iter().find(|u| u.scene_id == scene.id).expect("uploaded above").on_gpu;
+        let index = self.upload_index(scene)?;
+        let on_gpu = &self.uploads[index].on_gpu;
         let (device, scene) = (&self.gpu.device, &scene.scene);
         let options = crate::render::frame::FrameOptions::default();
         let mut frame = crate::render::frame::render_frame(device, scene, on_gpu, &settings, &options, progress)?;
