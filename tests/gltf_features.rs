@@ -845,3 +845,27 @@ fn a_meshopt_compressed_mesh_loads_as_its_plain_twin() {
     let error = format!("{:#}", load("huge.glb", (doc, bin)).unwrap_err());
     assert!(error.contains("fallback") && error.contains("at most"), "{error}");
 }
+
+/// `tests/data/draco/BoxDraco.glb` is the Box sample compressed by Google's own Draco encoder (glTF-Transform's
+/// `draco` command, draco3dgltf 1.5.7: Edgebreaker, positions quantized to 14 bits, normals to 10): the same 12
+/// triangles, each facing the same way, every corner within the quantization step of the uncompressed file's.
+#[test]
+fn a_draco_compressed_box_from_the_reference_encoder_loads_as_the_box() {
+    let plain = strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/Box.gltf")).unwrap();
+    let draco = strata::load_scene(&common::cli::repo_file("tests/data/draco/BoxDraco.glb")).unwrap();
+    assert!(draco.warnings.is_empty(), "{:?}", draco.warnings);
+    let corners = |scene: &strata::scene::Scene| -> Vec<[(Vec3, Vec3); 3]> {
+        let p = &scene.meshes[0].primitives[0];
+        let corner = |i: u32| (p.positions[i as usize], p.normals[i as usize]);
+        p.indices.chunks_exact(3).map(|t| [corner(t[0]), corner(t[1]), corner(t[2])]).collect()
+    };
+    let (a, b) = (corners(&plain), corners(&draco));
+    assert_eq!((a.len(), b.len()), (12, 12));
+    // The Box spans 1 m: 14 bits put a position within 1 / (2^14 - 1) / 2 of its value, 10-bit octahedral
+    // normals within about 0.002 rad.
+    let close = |x: &(Vec3, Vec3), y: &(Vec3, Vec3)| x.0.distance(y.0) < 1.0 / 16383.0 && x.1.dot(y.1) > 0.99999;
+    for (i, triangle) in a.iter().enumerate() {
+        let matches = b.iter().filter(|other| (0..3).any(|r| (0..3).all(|k| close(&triangle[k], &other[(k + r) % 3]))));
+        assert_eq!(matches.count(), 1, "triangle {i} of Box.gltf ({triangle:?}) has no one twin in BoxDraco.glb");
+    }
+}

@@ -13,10 +13,11 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 13] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "EXT_texture_webp",
+    "KHR_draco_mesh_compression",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
@@ -54,6 +55,14 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     let patched = with_texture_sources(bytes)?;
     let bytes = patched.as_deref().unwrap_or(bytes);
     let gltf = parse_and_validate(bytes)?;
+    let mut buffers = load_buffers(&gltf.document, gltf.blob.as_deref(), base_dir, options.uri_policy)?;
+    super::gltf_meshopt::decode_views(&gltf.document, &mut buffers)?;
+    // Draco-compressed primitives: their accessors now read decoded data, in a buffer appended to `buffers`.
+    let draco = gltf.document.extensions_used().any(|e| e == super::gltf_draco::EXTENSION);
+    let gltf = match draco.then(|| super::gltf_draco::decode_primitives(json_of(bytes)?, &mut buffers)).transpose()? {
+        Some(Some(json)) => parse_and_validate(&json)?,
+        _ => gltf,
+    };
     let document = &gltf.document;
     let mut scene = Scene::default();
     for ext in document.extensions_used() {
@@ -61,8 +70,6 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
             scene.warnings.push(format!("optional extension {ext} is not supported; rendering without it"));
         }
     }
-    let mut buffers = load_buffers(document, gltf.blob.as_deref(), base_dir, options.uri_policy)?;
-    super::gltf_meshopt::decode_views(document, &mut buffers)?;
     let images = load_images(document, &buffers, base_dir, options.uri_policy);
     (scene.textures, scene.images) = textures(document, images, &mut scene.warnings)?;
     scene.materials = document.materials().map(|m| material(m, document.as_json())).collect::<Result<Vec<_>>>()?;
@@ -158,12 +165,22 @@ fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf> {
 
 /// The gltf crate's validation (`Gltf::from_slice`'s), except that an extension it has no feature for but strata
 /// implements (`KHR_mesh_quantization`, read in gltf_accessors) may be required: check_required_extensions has
-/// already refused those strata lacks.
+/// already refused those strata lacks. And the accessors of a Draco-compressed primitive may have no data: the
+/// decoder fills them (gltf_draco).
 fn validated(gltf: gltf::Gltf) -> std::result::Result<gltf::Gltf, gltf::Error> {
     use gltf::json::validation::{Error, Validate};
     let root = gltf.document.as_json();
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| errors.push((path(), error)));
+    let decoded_later: Vec<String> = root
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .filter(|p| p.extensions.as_ref().is_some_and(|e| e.others.contains_key(super::gltf_draco::EXTENSION)))
+        .flat_map(|p| p.attributes.values().copied().chain(p.indices))
+        .map(|a| format!("accessors[{}].bufferView", a.value()))
+        .collect();
+    errors.retain(|(path, error)| !(*error == Error::Missing && decoded_later.contains(&path.as_str().to_string())));
     errors.retain(|(path, error)| {
         // The path reads `extensionsRequired[i] = "NAME"`.
         let required = path.as_str().strip_prefix("extensionsRequired[").and_then(|rest| rest.split(']').next());

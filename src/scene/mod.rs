@@ -5,6 +5,7 @@ pub mod camera;
 pub mod environment;
 pub mod framing;
 pub mod gltf_accessors;
+mod gltf_draco;
 pub mod gltf_export;
 pub mod gltf_import;
 mod gltf_instancing;
