@@ -27,6 +27,8 @@ pub fn decode_primitives(json: &[u8], buffers: &mut Vec<Vec<u8>>) -> Result<Opti
     let mut decoded = Vec::new();
     let mut new_views = Vec::new();
     let buffer_index = buffers.len();
+    // The new views follow the file's own.
+    let first_view = root.get("bufferViews").and_then(Value::as_array).map_or(0, Vec::len);
     let mesh_count = root.get("meshes").and_then(Value::as_array).map_or(0, Vec::len);
     for m in 0..mesh_count {
         let primitive_count = root["meshes"][m].get("primitives").and_then(Value::as_array).map_or(0, Vec::len);
@@ -36,23 +38,18 @@ pub fn decode_primitives(json: &[u8], buffers: &mut Vec<Vec<u8>>) -> Result<Opti
                 continue;
             };
             let extension = extension.clone();
-            let mut out = DecodedPrimitive { root: &mut root, data: &mut decoded, views: &mut new_views, buffer_index };
+            let mut out = DecodedPrimitive {
+                root: &mut root,
+                data: &mut decoded,
+                views: &mut new_views,
+                buffer_index,
+                first_view,
+            };
             out.decode(m, p, &extension, buffers).with_context(|| format!("mesh {m} primitive {p}: {EXTENSION}"))?;
         }
     }
     if new_views.is_empty() {
         return Ok(None);
-    }
-    let first_view = root.get("bufferViews").and_then(Value::as_array).map_or(0, Vec::len);
-    // Each decoded accessor named its view by its place among the new ones; they follow the file's own.
-    for accessor in root.get_mut("accessors").and_then(Value::as_array_mut).into_iter().flatten() {
-        if let Some(new_view) = accessor.get("strataDecodedView").and_then(Value::as_u64) {
-            let object = accessor.as_object_mut().expect("an accessor the decoder wrote to is an object");
-            object.remove("strataDecodedView");
-            object.insert("bufferView".into(), json!(first_view as u64 + new_view));
-            object.insert("byteOffset".into(), json!(0));
-            object.remove("sparse");
-        }
     }
     let views = root.as_object_mut().ok_or_else(|| anyhow!("the document is not a JSON object"))?;
     let views = views.entry("bufferViews").or_insert_with(|| json!([]));
@@ -76,6 +73,8 @@ struct DecodedPrimitive<'a> {
     data: &'a mut Vec<u8>,
     views: &'a mut Vec<Value>,
     buffer_index: usize,
+    /// The document's index of the first new view.
+    first_view: usize,
 }
 
 impl DecodedPrimitive<'_> {
@@ -168,7 +167,9 @@ impl DecodedPrimitive<'_> {
         self.data.extend(bytes);
         let accessor = self.root.pointer_mut(&format!("/accessors/{index}")).and_then(Value::as_object_mut);
         let accessor = accessor.ok_or_else(|| anyhow!("accessor {index} is not an object"))?;
-        accessor.insert("strataDecodedView".into(), json!(self.views.len() - 1));
+        accessor.insert("bufferView".into(), json!(self.first_view + self.views.len() - 1));
+        accessor.insert("byteOffset".into(), json!(0));
+        accessor.remove("sparse");
         Ok(())
     }
 }
