@@ -7,202 +7,186 @@
 //! C++ Draco encoder writes, including older bitstream versions.
 use anyhow::{anyhow, bail, Context as _, Result};
 use draco_core::{DataType, DecoderBuffer, FaceIndex, Mesh, MeshDecoder, PointAttribute, PointIndex};
+use gltf::accessor::DataType as ComponentType;
 use serde_json::{json, Value};
 
 pub const EXTENSION: &str = "KHR_draco_mesh_compression";
 
-/// glTF's accessor component types (glTF 2.0 §3.6.2.2).
-const BYTE: u64 = 5120;
-const UNSIGNED_BYTE: u64 = 5121;
-const SHORT: u64 = 5122;
-const UNSIGNED_SHORT: u64 = 5123;
-const UNSIGNED_INT: u64 = 5125;
-const FLOAT: u64 = 5126;
+/// glTF's UNSIGNED_INT component type (glTF 2.0 §3.6.2.2), of the indices accessor a primitive without one gets.
+const UNSIGNED_INT: u32 = 5125;
 
 /// The file's JSON with every Draco-compressed primitive's accessors pointed at its decoded data, which is
-/// appended to `buffers` as one new buffer; None when no primitive is compressed. `json` is the document's
-/// JSON text (a `.gltf` file, or a `.glb`'s JSON chunk); `buffers` its buffers, loaded.
-pub fn decode_primitives(json: &[u8], buffers: &mut Vec<Vec<u8>>) -> Result<Option<Vec<u8>>> {
+/// appended to `buffers` as one new buffer; None when no primitive is compressed. `document` is the file parsed
+/// (what is read), `json` its JSON text (a `.gltf` file, or a `.glb`'s JSON chunk: what is rewritten), `buffers`
+/// its buffers, loaded.
+pub fn decode_primitives(
+    document: &gltf::Document,
+    json: &[u8],
+    buffers: &mut Vec<Vec<u8>>,
+) -> Result<Option<Vec<u8>>> {
     let mut root: Value = serde_json::from_slice(json).context("not valid JSON")?;
-    let mut decoded = Vec::new();
-    let mut new_views = Vec::new();
-    let buffer_index = buffers.len();
+    let mut out = DecodedData { data: Vec::new(), views: Vec::new(), buffer_index: buffers.len() };
     // The new views follow the file's own.
-    let first_view = root.get("bufferViews").and_then(Value::as_array).map_or(0, Vec::len);
-    let mesh_count = root.get("meshes").and_then(Value::as_array).map_or(0, Vec::len);
-    for m in 0..mesh_count {
-        let primitive_count = root["meshes"][m].get("primitives").and_then(Value::as_array).map_or(0, Vec::len);
-        for p in 0..primitive_count {
-            let Some(extension) = root["meshes"][m]["primitives"][p].pointer(&format!("/extensions/{EXTENSION}"))
-            else {
-                continue;
-            };
-            let extension = extension.clone();
-            let mut out = DecodedPrimitive {
-                root: &mut root,
-                data: &mut decoded,
-                views: &mut new_views,
-                buffer_index,
-                first_view,
-            };
-            out.decode(m, p, &extension, buffers).with_context(|| format!("mesh {m} primitive {p}: {EXTENSION}"))?;
+    let first_view = document.views().len();
+    for mesh in document.meshes() {
+        for primitive in mesh.primitives() {
+            let Some(extension) = primitive.extension_value(EXTENSION) else { continue };
+            let (m, p) = (mesh.index(), primitive.index());
+            let decoded = decode(document, &primitive, extension, buffers)
+                .with_context(|| format!("mesh {m} primitive {p}: {EXTENSION}"))?;
+            for (accessor, bytes) in decoded.attributes {
+                let view = first_view + out.add(bytes);
+                point_at(&mut root, accessor, view)?;
+            }
+            let view = first_view + out.add(decoded.indices.bytes);
+            match decoded.indices.accessor {
+                Some(accessor) => point_at(&mut root, accessor, view)?,
+                // Without an indices accessor the faces still say which points make triangles: give it one.
+                None => {
+                    let count = decoded.indices.count;
+                    let accessor =
+                        json!({ "componentType": UNSIGNED_INT, "count": count, "type": "SCALAR", "bufferView": view });
+                    let accessors = array(&mut root, "accessors")?;
+                    accessors.push(accessor);
+                    let index = accessors.len() - 1;
+                    root["meshes"][m]["primitives"][p]["indices"] = json!(index);
+                }
+            }
         }
     }
-    if new_views.is_empty() {
+    if out.views.is_empty() {
         return Ok(None);
     }
-    let views = root.as_object_mut().ok_or_else(|| anyhow!("the document is not a JSON object"))?;
-    let views = views.entry("bufferViews").or_insert_with(|| json!([]));
-    views.as_array_mut().ok_or_else(|| anyhow!("bufferViews is not an array"))?.extend(new_views);
-    let buffer = json!({ "byteLength": decoded.len() });
-    root.as_object_mut()
-        .expect("checked above")
-        .entry("buffers")
-        .or_insert_with(|| json!([]))
-        .as_array_mut()
-        .ok_or_else(|| anyhow!("buffers is not an array"))?
-        .push(buffer);
-    buffers.push(decoded);
+    array(&mut root, "bufferViews")?.extend(out.views);
+    array(&mut root, "buffers")?.push(json!({ "byteLength": out.data.len() }));
+    buffers.push(out.data);
     Ok(Some(serde_json::to_vec(&root)?))
 }
 
-/// Where one primitive's decoded values go: the new buffer's bytes and views, and the accessors (in `root`) that
-/// read them.
-struct DecodedPrimitive<'a> {
-    root: &'a mut Value,
-    data: &'a mut Vec<u8>,
-    views: &'a mut Vec<Value>,
+/// The new buffer's bytes and views.
+struct DecodedData {
+    data: Vec<u8>,
+    views: Vec<Value>,
     buffer_index: usize,
-    /// The document's index of the first new view.
-    first_view: usize,
 }
 
-impl DecodedPrimitive<'_> {
-    fn decode(&mut self, m: usize, p: usize, extension: &Value, buffers: &[Vec<u8>]) -> Result<()> {
-        let view = extension.get("bufferView").and_then(Value::as_u64).ok_or_else(|| anyhow!("has no bufferView"))?;
-        let bytes = self.view_bytes(view as usize, buffers)?;
-        // A decoder bug met by malformed input becomes an error, not the end of the process.
-        let decoded = std::panic::catch_unwind(|| {
-            let mut mesh = Mesh::new();
-            MeshDecoder::new().decode(&mut DecoderBuffer::new(bytes), &mut mesh).map(|()| mesh)
-        });
-        let mesh = match decoded {
-            Ok(Ok(mesh)) => mesh,
-            Ok(Err(e)) => bail!("bufferView {view} is not a Draco mesh the decoder reads: {e}"),
-            Err(_) => bail!("bufferView {view} is not a Draco mesh the decoder reads (it failed on it)"),
-        };
-        let attributes = extension
-            .get("attributes")
-            .and_then(Value::as_object)
-            .ok_or_else(|| anyhow!("has no attributes object"))?;
-        let primitive = self.root["meshes"][m]["primitives"][p].clone();
-        for (semantic, id) in attributes {
-            let id = id.as_u64().and_then(|id| u32::try_from(id).ok()).ok_or_else(|| {
-                anyhow!("attribute {semantic}: the Draco attribute id {id} is not a non-negative integer")
-            })?;
-            let accessor = primitive
-                .pointer(&format!("/attributes/{semantic}"))
-                .and_then(Value::as_u64)
-                .ok_or_else(|| anyhow!("names attribute {semantic}, which the primitive does not have"))?;
-            let source = mesh
-                .attribute_by_unique_id(id)
-                .ok_or_else(|| anyhow!("attribute {semantic}: the Draco mesh has no attribute with id {id}"))?;
-            let values = attribute_bytes(source, &mesh, self.accessor(accessor)?)
-                .with_context(|| format!("attribute {semantic}"))?;
-            self.add(accessor, values)?;
-        }
-        let triangles = (0..mesh.num_faces()).flat_map(|f| mesh.face(FaceIndex(f as u32))).map(|p| p.0);
-        match primitive.get("indices").and_then(Value::as_u64) {
-            Some(accessor) => {
-                let values = index_bytes(triangles, self.accessor(accessor)?).context("indices")?;
-                self.add(accessor, values)
-            }
-            // Without an indices accessor the faces still say which points make triangles: give it one.
-            None => {
-                let indices: Vec<u32> = triangles.collect();
-                let accessors = self.root.as_object_mut().expect("a document").entry("accessors");
-                let accessors = accessors.or_insert_with(|| json!([])).as_array_mut();
-                let accessors = accessors.ok_or_else(|| anyhow!("accessors is not an array"))?;
-                accessors.push(json!({ "componentType": UNSIGNED_INT, "count": indices.len(), "type": "SCALAR" }));
-                let accessor = accessors.len() as u64 - 1;
-                self.root["meshes"][m]["primitives"][p]["indices"] = json!(accessor);
-                self.add(accessor, indices.iter().flat_map(|i| i.to_le_bytes()).collect())
-            }
-        }
-    }
-
-    fn view_bytes<'b>(&self, view: usize, buffers: &'b [Vec<u8>]) -> Result<&'b [u8]> {
-        let v = self.root.pointer(&format!("/bufferViews/{view}")).ok_or_else(|| anyhow!("no bufferView {view}"))?;
-        let field = |name: &str| v.get(name).and_then(Value::as_u64).map(|n| n as usize);
-        let buffer = field("buffer").ok_or_else(|| anyhow!("bufferView {view} names no buffer"))?;
-        let (offset, length) = (field("byteOffset").unwrap_or(0), field("byteLength").unwrap_or(0));
-        buffers
-            .get(buffer)
-            .and_then(|b| b.get(offset..offset.checked_add(length)?))
-            .ok_or_else(|| anyhow!("bufferView {view} ({length} bytes at {offset}) lies outside buffer {buffer}"))
-    }
-
-    fn accessor(&self, index: u64) -> Result<AccessorFormat> {
-        let a = self.root.pointer(&format!("/accessors/{index}")).ok_or_else(|| anyhow!("no accessor {index}"))?;
-        let component_type = a.get("componentType").and_then(Value::as_u64).unwrap_or(0);
-        let components = match a.get("type").and_then(Value::as_str).unwrap_or("") {
-            "SCALAR" => 1,
-            "VEC2" => 2,
-            "VEC3" => 3,
-            "VEC4" => 4,
-            other => bail!("accessor {index} has type {other:?}, which a Draco attribute cannot fill"),
-        };
-        let count = a.get("count").and_then(Value::as_u64).unwrap_or(0) as usize;
-        Ok(AccessorFormat { index, component_type, components, count })
-    }
-
-    /// Appends `bytes` to the new buffer as a view of its own (4-byte aligned, as glTF asks of every component
-    /// type) and marks accessor `index` to read it.
-    fn add(&mut self, index: u64, bytes: Vec<u8>) -> Result<()> {
+impl DecodedData {
+    /// Appends `bytes` as a view of its own (4-byte aligned, as glTF asks of every component type); returns its
+    /// place among the new views.
+    fn add(&mut self, bytes: Vec<u8>) -> usize {
         while self.data.len() % 4 != 0 {
             self.data.push(0);
         }
         self.views
             .push(json!({ "buffer": self.buffer_index, "byteOffset": self.data.len(), "byteLength": bytes.len() }));
         self.data.extend(bytes);
-        let accessor = self.root.pointer_mut(&format!("/accessors/{index}")).and_then(Value::as_object_mut);
-        let accessor = accessor.ok_or_else(|| anyhow!("accessor {index} is not an object"))?;
-        accessor.insert("bufferView".into(), json!(self.first_view + self.views.len() - 1));
-        accessor.insert("byteOffset".into(), json!(0));
-        accessor.remove("sparse");
-        Ok(())
+        self.views.len() - 1
     }
 }
 
-/// What an accessor the decoded values fill says they are.
-struct AccessorFormat {
-    index: u64,
-    component_type: u64,
-    components: usize,
+/// The document's top-level array `name`, made if the file has none.
+fn array<'a>(root: &'a mut Value, name: &str) -> Result<&'a mut Vec<Value>> {
+    let object = root.as_object_mut().ok_or_else(|| anyhow!("the document is not a JSON object"))?;
+    object.entry(name).or_insert_with(|| json!([])).as_array_mut().ok_or_else(|| anyhow!("{name} is not an array"))
+}
+
+/// Points accessor `index` at bufferView `view` from its start.
+fn point_at(root: &mut Value, index: usize, view: usize) -> Result<()> {
+    let accessor = root.pointer_mut(&format!("/accessors/{index}")).and_then(Value::as_object_mut);
+    let accessor = accessor.ok_or_else(|| anyhow!("accessor {index} is not an object"))?;
+    accessor.insert("bufferView".into(), json!(view));
+    accessor.insert("byteOffset".into(), json!(0));
+    accessor.remove("sparse");
+    Ok(())
+}
+
+/// One primitive's decoded values: each compressed attribute's accessor and bytes, and its indices.
+struct DecodedPrimitive {
+    attributes: Vec<(usize, Vec<u8>)>,
+    indices: DecodedIndices,
+}
+
+struct DecodedIndices {
+    /// The primitive's indices accessor, if it has one (else the bytes are u32).
+    accessor: Option<usize>,
+    bytes: Vec<u8>,
     count: usize,
 }
 
-/// The Draco data type a glTF component type is decoded from, and its size in bytes.
-fn draco_type(component_type: u64) -> Option<(DataType, usize)> {
-    Some(match component_type {
-        BYTE => (DataType::Int8, 1),
-        UNSIGNED_BYTE => (DataType::Uint8, 1),
-        SHORT => (DataType::Int16, 2),
-        UNSIGNED_SHORT => (DataType::Uint16, 2),
-        UNSIGNED_INT => (DataType::Uint32, 4),
-        FLOAT => (DataType::Float32, 4),
-        _ => return None,
-    })
+fn decode(
+    document: &gltf::Document,
+    primitive: &gltf::Primitive<'_>,
+    extension: &Value,
+    buffers: &[Vec<u8>],
+) -> Result<DecodedPrimitive> {
+    let view = extension.get("bufferView").and_then(Value::as_u64).ok_or_else(|| anyhow!("has no bufferView"))?;
+    let view = document.views().nth(view as usize).ok_or_else(|| anyhow!("no bufferView {view}"))?;
+    let (offset, length) = (view.offset(), view.length());
+    let bytes = buffers
+        .get(view.buffer().index())
+        .and_then(|b| b.get(offset..offset.checked_add(length)?))
+        .ok_or_else(|| anyhow!("bufferView {} ({length} bytes at {offset}) lies outside its buffer", view.index()))?;
+    // A decoder bug met by malformed input becomes an error, not the end of the process.
+    let decoded = std::panic::catch_unwind(|| {
+        let mut mesh = Mesh::new();
+        MeshDecoder::new().decode(&mut DecoderBuffer::new(bytes), &mut mesh).map(|()| mesh)
+    });
+    let mesh = match decoded {
+        Ok(Ok(mesh)) => mesh,
+        Ok(Err(e)) => bail!("bufferView {} is not a Draco mesh the decoder reads: {e}", view.index()),
+        Err(_) => bail!("bufferView {} is not a Draco mesh the decoder reads (it failed on it)", view.index()),
+    };
+    let ids =
+        extension.get("attributes").and_then(Value::as_object).ok_or_else(|| anyhow!("has no attributes object"))?;
+    let mut attributes = Vec::new();
+    for (semantic, id) in ids {
+        let id = id.as_u64().and_then(|id| u32::try_from(id).ok()).ok_or_else(|| {
+            anyhow!("attribute {semantic}: the Draco attribute id {id} is not a non-negative integer")
+        })?;
+        let (_, accessor) = primitive
+            .attributes()
+            .find(|(s, _)| s.to_string() == *semantic)
+            .ok_or_else(|| anyhow!("names attribute {semantic}, which the primitive does not have"))?;
+        let source = mesh
+            .attribute_by_unique_id(id)
+            .ok_or_else(|| anyhow!("attribute {semantic}: the Draco mesh has no attribute with id {id}"))?;
+        let values = attribute_bytes(source, &mesh, &accessor).with_context(|| format!("attribute {semantic}"))?;
+        attributes.push((accessor.index(), values));
+    }
+    let triangles: Vec<u32> = (0..mesh.num_faces()).flat_map(|f| mesh.face(FaceIndex(f as u32))).map(|p| p.0).collect();
+    let count = triangles.len();
+    let indices = match primitive.indices() {
+        Some(accessor) => DecodedIndices {
+            accessor: Some(accessor.index()),
+            bytes: index_bytes(&triangles, &accessor).context("indices")?,
+            count,
+        },
+        None => {
+            DecodedIndices { accessor: None, bytes: triangles.iter().flat_map(|i| i.to_le_bytes()).collect(), count }
+        }
+    };
+    Ok(DecodedPrimitive { attributes, indices })
+}
+
+/// The Draco data type a glTF component type is decoded from.
+fn draco_type(component_type: ComponentType) -> DataType {
+    match component_type {
+        ComponentType::I8 => DataType::Int8,
+        ComponentType::U8 => DataType::Uint8,
+        ComponentType::I16 => DataType::Int16,
+        ComponentType::U16 => DataType::Uint16,
+        ComponentType::U32 => DataType::Uint32,
+        ComponentType::F32 => DataType::Float32,
+    }
 }
 
 /// A Draco attribute's value at each of the mesh's points, as the accessor's components.
-fn attribute_bytes(source: &PointAttribute, mesh: &Mesh, accessor: AccessorFormat) -> Result<Vec<u8>> {
-    let AccessorFormat { index, component_type, components, count } = accessor;
-    let (data_type, size) =
-        draco_type(component_type).ok_or_else(|| anyhow!("accessor {index} has componentType {component_type}"))?;
-    if source.data_type() != data_type || usize::from(source.num_components()) != components {
+fn attribute_bytes(source: &PointAttribute, mesh: &Mesh, accessor: &gltf::Accessor<'_>) -> Result<Vec<u8>> {
+    let (index, component_type, count) = (accessor.index(), accessor.data_type(), accessor.count());
+    let components = accessor.dimensions().multiplicity();
+    if source.data_type() != draco_type(component_type) || usize::from(source.num_components()) != components {
         bail!(
-            "the Draco attribute holds {} × {:?}, accessor {index} {components} × componentType {component_type}",
+            "the Draco attribute holds {} × {:?}, accessor {index} {components} × {component_type:?}",
             source.num_components(),
             source.data_type()
         );
@@ -210,7 +194,7 @@ fn attribute_bytes(source: &PointAttribute, mesh: &Mesh, accessor: AccessorForma
     if count != mesh.num_points() {
         bail!("accessor {index} counts {count} elements, the Draco mesh {} points", mesh.num_points());
     }
-    let stride = components * size;
+    let stride = components * component_type.size();
     let mut out = vec![0u8; count * stride];
     for (point, value) in out.chunks_exact_mut(stride).enumerate() {
         let at = source.mapped_index(PointIndex(point as u32)).0 as usize;
@@ -222,20 +206,20 @@ fn attribute_bytes(source: &PointAttribute, mesh: &Mesh, accessor: AccessorForma
 }
 
 /// The faces' point indices in the accessor's component type.
-fn index_bytes(indices: impl Iterator<Item = u32>, accessor: AccessorFormat) -> Result<Vec<u8>> {
-    let AccessorFormat { index, component_type, components, count } = accessor;
-    let indices: Vec<u32> = indices.collect();
+fn index_bytes(indices: &[u32], accessor: &gltf::Accessor<'_>) -> Result<Vec<u8>> {
+    let (index, component_type, count) = (accessor.index(), accessor.data_type(), accessor.count());
+    let components = accessor.dimensions().multiplicity();
     if components != 1 || indices.len() != count {
         bail!("accessor {index} holds {count} × {components} values, the Draco mesh {} indices", indices.len());
     }
-    let too_large = |i: u32| anyhow!("index {i} does not fit accessor {index}'s componentType {component_type}");
+    let too_large = |i: u32| anyhow!("index {i} does not fit accessor {index}'s {component_type:?}");
     let mut out = Vec::with_capacity(indices.len() * 4);
-    for &i in &indices {
+    for &i in indices {
         match component_type {
-            UNSIGNED_BYTE => out.push(u8::try_from(i).map_err(|_| too_large(i))?),
-            UNSIGNED_SHORT => out.extend(u16::try_from(i).map_err(|_| too_large(i))?.to_le_bytes()),
-            UNSIGNED_INT => out.extend(i.to_le_bytes()),
-            _ => bail!("accessor {index}: indices cannot have componentType {component_type}"),
+            ComponentType::U8 => out.push(u8::try_from(i).map_err(|_| too_large(i))?),
+            ComponentType::U16 => out.extend(u16::try_from(i).map_err(|_| too_large(i))?.to_le_bytes()),
+            ComponentType::U32 => out.extend(i.to_le_bytes()),
+            _ => bail!("accessor {index}: indices cannot be {component_type:?}"),
         }
     }
     Ok(out)
@@ -247,6 +231,9 @@ mod tests {
     use crate::scene::gltf_import::{load_gltf_bytes, LoadOptions};
     use base64::Engine as _;
     use draco_core::{EncoderBuffer, EncoderOptions, GeometryAttributeType, MeshEncoder};
+
+    const UNSIGNED_SHORT: u32 = 5123;
+    const FLOAT: u32 = 5126;
 
     /// Positions, normals, texture coordinates and triangle indices.
     type Grid = (Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[f32; 2]>, Vec<u16>);
@@ -284,7 +271,7 @@ mod tests {
         format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(bytes))
     }
 
-    fn accessor(view: Option<usize>, component_type: u64, count: usize, kind: &str) -> Value {
+    fn accessor(view: Option<usize>, component_type: u32, count: usize, kind: &str) -> Value {
         let mut a = json!({ "componentType": component_type, "count": count, "type": kind });
         if let Some(view) = view {
             a["bufferView"] = json!(view);

@@ -59,7 +59,10 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     super::gltf_meshopt::decode_views(&gltf.document, &mut buffers)?;
     // Draco-compressed primitives: their accessors now read decoded data, in a buffer appended to `buffers`.
     let draco = gltf.document.extensions_used().any(|e| e == super::gltf_draco::EXTENSION);
-    let gltf = match draco.then(|| super::gltf_draco::decode_primitives(json_of(bytes)?, &mut buffers)).transpose()? {
+    let gltf = match draco
+        .then(|| super::gltf_draco::decode_primitives(&gltf.document, json_of(bytes)?, &mut buffers))
+        .transpose()?
+    {
         Some(Some(json)) => parse_and_validate(&json)?,
         _ => gltf,
     };
