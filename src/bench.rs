@@ -76,9 +76,8 @@ pub fn time_gbuffer(
     let (gpu_scene, textures) = (&on_gpu.geometry, &on_gpu.textures);
     let pass = GBufferPass::new(device)?;
     let gbuffer = GBuffer::new(device, width, height)?;
-    let transforms = scene.instance_transforms_at(scene.shutter.0);
     let materials = pass.materials(&scene, textures)?;
-    let inputs = pass.inputs(&scene, gpu_scene, textures, &materials, &transforms)?;
+    let inputs = pass.inputs(&scene, gpu_scene, textures, &materials, scene.shutter.0)?;
     let camera = scene.camera_at(scene.shutter.0);
     let timer = TimestampPool::new(device, "gbuffer bench timestamps", 2)?;
     let mut times = Vec::new();

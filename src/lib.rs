@@ -101,9 +101,8 @@ fn pinhole_gbuffers(
 ) -> Result<Vec<render::gbuffer::GBufferFrame>> {
     let pass = render::gbuffer::GBufferPass::new(device)?;
     let gbuffer = render::gbuffer::GBuffer::new(device, width, height)?;
-    let transforms = scene.instance_transforms_at(scene.shutter.0);
     let materials = pass.materials(scene, &on_gpu.textures)?;
-    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, &transforms)?;
+    let inputs = pass.inputs(scene, &on_gpu.geometry, &on_gpu.textures, &materials, scene.shutter.0)?;
     let camera = pinhole_at(scene, scene.shutter.0);
     jitters
         .iter()
@@ -249,6 +248,7 @@ pub fn part_provenance(
         camera,
         lights,
         animations,
+        skins,
         node_motion,
         camera_motion,
         shutter,
@@ -257,6 +257,9 @@ pub fn part_provenance(
     let mut scene_hash = hash::Fnv1a::default();
     write!(scene_hash, "{meshes:?}{materials:?}{textures:?}{images:?}{nodes:?}{roots:?}{instances:?}{cameras:?}")?;
     write!(scene_hash, "{camera:?}{lights:?}{animations:?}{node_motion:?}{camera_motion:?}{shutter:?}")?;
+    if !skins.is_empty() {
+        write!(scene_hash, "{skins:?}")?;
+    }
     if let Some(scene::environment::Environment { name: _, width, height, texels, rotation_degrees, intensity }) =
         environment
     {

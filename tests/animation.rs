@@ -1,9 +1,13 @@
 //! Animation interpolation through the importer, on small glTFs written here: STEP and CUBICSPLINE
 //! translation, and CUBICSPLINE rotation, sampled at several times against values computed by hand from
-//! glTF 2.0 Appendix C.
+//! glTF 2.0 Appendix C. Skins (§3.7.3) on the glTF tutorial's SimpleSkin: vertices and rendered pixels at keyframe
+//! times against the tutorial's skinning worked by hand, identity joints against the unskinned mesh, and motion
+//! blur confined to what the turning joint moves.
 mod common;
 use base64::Engine as _;
 use common::cli::{outcome, strata, temp_dir};
+use common::scenes::{render, settings};
+use common::GpuTest;
 use glam::{Quat, Vec3};
 use serde_json::json;
 use strata::scene::animation::AnimationChoice;
@@ -228,4 +232,217 @@ fn one_animation_clip_plays_the_first_unless_another_is_named() {
     ]);
     assert!(!run.status.success() && !out.exists(), "{}", outcome(&run));
     assert!(outcome(&run).contains("no animation clip \"Jog\""), "{}", outcome(&run));
+}
+
+// ---- Skins (glTF 2.0 §3.7.3) on the glTF tutorial's SimpleSkin: a strip of 4 quads over y = 0..2 whose rows weigh
+// joint 1 by 0, ¼, ½, ¾, 1; joint 1 turns about z from 0° (t = 0) to 90° (t = 1) and back.
+
+fn simple_skin() -> strata::scene::Scene {
+    let mut scene = strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/SimpleSkin.gltf")).unwrap();
+    scene.add_default_light();
+    scene
+}
+
+/// The tutorial's skinning by hand at joint angle `theta`: J0 = T(−½, 0, 0) and J1 = T(0, 1, 0)·Rz(θ)·T(−½, −1, 0)
+/// (the joints' world transforms times the file's inverse bind matrices), blended by the row's weight on J1.
+fn hand_skinned(vertex: Vec3, theta: f32) -> Vec3 {
+    let w1 = vertex.y / 2.0;
+    let j0 = vertex + Vec3::new(-0.5, 0.0, 0.0);
+    let j1 = Quat::from_rotation_z(theta) * (vertex - Vec3::new(0.5, 1.0, 0.0)) + Vec3::Y;
+    j0 * (1.0 - w1) + j1 * w1
+}
+
+#[test]
+fn simple_skin_vertices_at_its_keyframes_are_where_the_tutorial_puts_them() {
+    let scene = simple_skin();
+    let rest = &scene.meshes[0].primitives[0];
+    assert_eq!(scene.deformed_instances(), vec![0], "the one instance is skinned");
+    // At t = 1 (90°), worked through by hand, in the file's vertex order (before flat normals split them).
+    let at_90 = [
+        (-0.5, 0.0),
+        (0.5, 0.0),
+        (-0.25, 0.5),
+        (0.5, 0.75),
+        (-0.25, 0.75),
+        (0.25, 1.25),
+        (-0.5, 0.75),
+        (-0.25, 1.5),
+        (-1.0, 0.5),
+        (-1.0, 1.5),
+    ];
+    let file_vertex = |i: usize| Vec3::new((i % 2) as f32, (i / 2) as f32 * 0.5, 0.0);
+    for (t, theta) in [(0.0, 0.0), (0.5, std::f32::consts::FRAC_PI_4), (1.0, std::f32::consts::FRAC_PI_2)] {
+        let node_world = scene.node_world_transforms(Some(t));
+        let skinned = scene.deform_instance(0, &node_world).unwrap();
+        for (p, &q) in rest.positions.iter().zip(&skinned[0].positions) {
+            // The file's keys are rounded to 3 digits (0.383, 0.924, 0.707).
+            let want = hand_skinned(*p, theta);
+            assert!((q - want).length() < 2e-3, "t = {t}: vertex {p} skinned to {q}, by hand {want}");
+        }
+        if t == 1.0 {
+            for (i, &(x, y)) in at_90.iter().enumerate() {
+                let want = Vec3::new(x, y, 0.0);
+                assert!((hand_skinned(file_vertex(i), theta) - want).length() < 1e-6, "vertex {i} by hand");
+            }
+        }
+    }
+    // Skinned instances are placed by their joints alone.
+    assert_eq!(scene.instance_transforms_at(1.0)[0], glam::Mat4::IDENTITY);
+}
+
+/// An orthographic camera looking down −z at (`cx`, `cy`), seeing ±`half` metres.
+fn facing_the_strip(cx: f32, cy: f32, half: f32) -> strata::scene::Camera {
+    strata::scene::Camera {
+        name: "facing the strip".into(),
+        world_from_camera: strata::scene::camera::look_at(Vec3::new(cx, cy, 5.0), Vec3::new(cx, cy, 0.0), Vec3::Y),
+        projection: strata::scene::Projection::Orthographic { xmag: half, ymag: half, znear: 0.1, zfar: 10.0 },
+        lens: strata::scene::camera::Lens::PINHOLE,
+    }
+}
+
+/// Whether `p` is inside triangle `abc` (either winding), and its distance to the triangle's nearest edge.
+fn inside_and_edge_distance(p: glam::Vec2, [a, b, c]: [glam::Vec2; 3]) -> (bool, f32) {
+    let edge = |u: glam::Vec2, v: glam::Vec2| {
+        let d = v - u;
+        let t = ((p - u).dot(d) / d.length_squared()).clamp(0.0, 1.0);
+        ((p - u).perp_dot(d), (p - (u + d * t)).length())
+    };
+    let sides = [edge(a, b), edge(b, c), edge(c, a)];
+    let inside = sides.iter().all(|s| s.0 >= 0.0) || sides.iter().all(|s| s.0 <= 0.0);
+    (inside, sides.iter().map(|s| s.1).fold(f32::INFINITY, f32::min))
+}
+
+#[test]
+fn simple_skin_covers_the_pixels_of_its_hand_skinned_shape() {
+    use strata::scene::settings::{Primary, RenderSettings, SamplerKind};
+    let gpu = GpuTest::new();
+    let (size, half, center) = (64u32, 1.0f32, glam::Vec2::new(-0.25, 0.75));
+    let indices: Vec<u32> = vec![0, 1, 3, 0, 3, 2, 2, 3, 5, 2, 5, 4, 4, 5, 7, 4, 7, 6, 6, 7, 9, 6, 9, 8];
+    let file_vertex = |i: u32| Vec3::new((i % 2) as f32, (i / 2) as f32 * 0.5, 0.0);
+    for (t, theta) in [(0.5, std::f32::consts::FRAC_PI_4), (1.0, std::f32::consts::FRAC_PI_2)] {
+        let mut scene = simple_skin();
+        scene.camera = Some(facing_the_strip(center.x, center.y, half));
+        scene.shutter = (t, t);
+        // Both ways to the visible surface: the raster pass draws the deformed streams, primary rays hit the
+        // BLAS rebuilt from them.
+        for primary in [Primary::Raster, Primary::Rays] {
+            let s = RenderSettings { primary, ..settings(size, size, 4, SamplerKind::Jittered) };
+            let frame = render(gpu.device(), &scene, &s);
+            let triangles: Vec<[glam::Vec2; 3]> = indices
+                .chunks(3)
+                .map(|c| [0, 1, 2].map(|k| hand_skinned(file_vertex(c[k]), theta).truncate()))
+                .collect();
+            let pixel = 2.0 * half / size as f32;
+            let (mut checked, mut covered) = (0, 0);
+            for y in 0..size {
+                for x in 0..size {
+                    // Image y runs down, world y up.
+                    let p = center
+                        + glam::Vec2::new(x as f32 + 0.5 - size as f32 / 2.0, size as f32 / 2.0 - y as f32 - 0.5)
+                            * pixel;
+                    let (inside, edge) = triangles
+                        .iter()
+                        .map(|&tri| inside_and_edge_distance(p, tri))
+                        .fold((false, f32::INFINITY), |(i, e), (ti, te)| (i || ti, e.min(te)));
+                    // Samples jitter within the pixel: only pixels a pixel and a half from every edge are decided.
+                    if edge < 1.5 * pixel {
+                        continue;
+                    }
+                    let coverage = frame.linear.pixels[(y * size + x) as usize][3];
+                    assert_eq!(
+                        coverage,
+                        if inside { 1.0 } else { 0.0 },
+                        "t = {t}, {primary:?}: pixel ({x}, {y}) at {p}"
+                    );
+                    checked += 1;
+                    covered += usize::from(inside);
+                }
+            }
+            assert!(checked > size * size / 2 && covered > 150, "t = {t}: {checked} pixels checked, {covered} covered");
+        }
+    }
+    gpu.finish().unwrap();
+}
+
+#[test]
+fn identity_joint_matrices_render_exactly_as_the_unskinned_mesh() {
+    use strata::scene::settings::SamplerKind;
+    let gpu = GpuTest::new();
+    let mut skinned = simple_skin();
+    skinned.animations.clear();
+    // Inverse bind matrices that undo the joints' rest transforms: every joint matrix is the identity.
+    let rest = skinned.node_world_transforms(None);
+    let joints = skinned.skins[0].joints.clone();
+    skinned.skins[0].inverse_bind = joints.iter().map(|&j| rest[j].inverse()).collect();
+    assert!(skinned.skins[0].joint_matrices(&rest).iter().all(|m| *m == glam::Mat4::IDENTITY));
+    let mut unskinned = skinned.clone();
+    unskinned.nodes[0].skin = None;
+    for scene in [&mut skinned, &mut unskinned] {
+        scene.camera = Some(facing_the_strip(0.0, 1.0, 1.2));
+    }
+    // Bounces, so that rays hit the deformed copy's records as well as the raster pass drawing it.
+    let s = strata::scene::settings::RenderSettings { bounces: 2, ..settings(48, 48, 4, SamplerKind::MultiJittered) };
+    let (a, b) = (render(gpu.device(), &skinned, &s), render(gpu.device(), &unskinned, &s));
+    assert!(a.linear.pixels.iter().any(|p| p[3] == 1.0), "the strip is in view");
+    assert!(a.linear == b.linear, "identity joints must render the unskinned mesh bit for bit");
+    drop((a, b));
+    gpu.finish().unwrap();
+}
+
+#[test]
+fn a_turning_joint_blurs_only_the_part_it_moves() {
+    use strata::scene::settings::SamplerKind;
+    let gpu = GpuTest::new();
+    let mut scene = simple_skin();
+    // The bottom two rows (y ≤ ½) on joint 0 alone, the rest on the turning joint 1 alone.
+    let positions = scene.meshes[0].primitives[0].positions.clone();
+    let influences = &mut scene.meshes[0].primitives[0].skin_influences[0];
+    for (weights, p) in influences.weights.iter_mut().zip(&positions) {
+        *weights = if p.y <= 0.5 { glam::Vec4::new(1.0, 0.0, 0.0, 0.0) } else { glam::Vec4::new(0.0, 1.0, 0.0, 0.0) };
+    }
+    let (size, half, center) = (80u32, 1.25f32, glam::Vec2::new(-0.25, 1.0));
+    scene.camera = Some(facing_the_strip(center.x, center.y, half));
+    let s = settings(size, size, 32, SamplerKind::Jittered);
+    let mut still = scene.clone();
+    still.shutter = (0.0, 0.0);
+    // Joint 1 turns by 45° while the shutter is open.
+    scene.shutter = (0.0, 0.5);
+    let (blurred, sharp) = (render(gpu.device(), &scene, &s), render(gpu.device(), &still, &s));
+    let pixel = 2.0 * half / size as f32;
+    let world_y = |y: u32| center.y + (size as f32 / 2.0 - y as f32 - 0.5) * pixel;
+    let partial = |f: &strata::render::frame::RenderedFrame, rows: &mut dyn Iterator<Item = u32>| {
+        rows.flat_map(|y| (0..size).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                (0.0..1.0).contains(&f.linear.pixels[(y * size + x) as usize][3])
+                    && f.linear.pixels[(y * size + x) as usize][3] > 0.0
+            })
+            .count()
+    };
+    // Below y = ½ (less a pixel for the jitter) nothing moves: the same bits as the still frame.
+    for y in (0..size).filter(|&y| world_y(y) < 0.5 - pixel) {
+        for x in 0..size {
+            let i = (y * size + x) as usize;
+            assert_eq!(blurred.linear.pixels[i], sharp.linear.pixels[i], "pixel ({x}, {y}) below the joint moved");
+        }
+    }
+    // Above it, the strip sweeps ~0.9 m at its tip: many more partly covered pixels than the still frame's edges.
+    let above = || (0..size).filter(|&y| world_y(y) > 0.5 + pixel);
+    let (moving, edges) = (partial(&blurred, &mut above()), partial(&sharp, &mut above()));
+    assert!(moving > 5 * edges, "{moving} partly covered pixels where the joint turns, {edges} in the still frame");
+    drop((blurred, sharp));
+    gpu.finish().unwrap();
+}
+
+#[test]
+fn a_skin_naming_a_joint_it_does_not_have_is_an_error_that_says_so() {
+    let text = std::fs::read_to_string(common::cli::repo_file("tests/data/gltf-samples/SimpleSkin.gltf")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["skins"][0]["joints"] = json!([1]);
+    let dir = temp_dir("skin-joint-out-of-range");
+    let file = dir.join("bad-skin.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let err = format!("{:#}", strata::load_scene(&file).unwrap_err());
+    assert!(err.contains("bad-skin.gltf") && err.contains("names joint 1, but the skin has 1"), "{err}");
+    let out = strata(&["info".as_ref(), file.as_os_str()]);
+    assert!(!out.status.success(), "{}", outcome(&out));
 }

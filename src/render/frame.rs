@@ -257,7 +257,7 @@ pub fn render_samples(
         sums: &targets.sums,
         materials: &materials,
         lights: &slots.lights,
-        primitives: &ray_scene.records,
+        primitives: slots.primitive_records(),
         textures: &on_gpu.textures,
         counters: &slots.counters,
         cameras: &slots.cameras,
@@ -647,7 +647,7 @@ impl SamplePasses<'_> {
         let device = targets.sums.device();
         let first = !matches!(sums, SumsStart::Continue);
         stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
-        slots.tlas.record_build(cmd, slot);
+        slots.record_builds(cmd, slot);
         stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
         if !self.traced || first {
             let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };

@@ -2,6 +2,7 @@
 //! attachments of `gbuffer_layout` with dynamic rendering; the fragment shader evaluates the material and the
 //! Blinn bump-mapped normal. One pipeline draws every material: materials in a storage buffer, textures in a
 //! combined-image-sampler array indexed per material.
+use super::deformed::DeformedStreams;
 use super::gbuffer_layout::{attachment, GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT};
 use super::gpu_scene::GpuScene;
 use super::textures::GpuTextures;
@@ -90,17 +91,32 @@ pub struct GBufferInputs<'m> {
     order: Vec<(usize, usize)>,
     /// (instance, material) per draw, in draw order.
     draw_of: Vec<(usize, u32)>,
+    /// The vertex streams of deformed (skinned) instances, per slot; drawn in place of their mesh's.
+    pub deformed: DeformedStreams,
     slots: u32,
 }
 
-impl GBufferInputs<'_> {
-    /// Fills `slot` with the draws at instance transforms `transforms` (one per scene instance). The GPU must
-    /// not be reading that slot.
-    /// Writes the draws of `slot`: each instance at its transform, with the sample's BLEND coverage key.
-    pub fn write_slot(&mut self, slot: u32, transforms: &[Mat4], coverage_key: u32) -> Result<()> {
+impl<'m> GBufferInputs<'m> {
+    /// The scene geometry the draws read.
+    pub fn geometry(&self) -> &'m GpuScene {
+        self.geometry
+    }
+
+    /// Writes the draws of `slot` for one sample's time: each instance at its transform (`transforms`, one per
+    /// scene instance, from the node transforms `node_world`), deformed instances deformed, with the sample's BLEND
+    /// coverage key. The GPU must not be reading that slot.
+    pub fn write_slot(
+        &mut self,
+        slot: u32,
+        scene: &Scene,
+        node_world: &[Mat4],
+        transforms: &[Mat4],
+        coverage_key: u32,
+    ) -> Result<()> {
         if slot >= self.slots {
             bail!("gbuffer draws: slot {slot} of {}", self.slots);
         }
+        self.deformed.write_slot(slot, scene, node_world)?;
         let records: Vec<GBufferDraw> = self
             .draw_of
             .iter()
@@ -183,20 +199,19 @@ impl GBufferPass {
         Ok(GBufferMaterials { buffer })
     }
 
-    /// Draw records for `scene` with instance transforms `transforms` (one per instance, at a sample's time).
+    /// Draw records for `scene` at time `t` (animation, motion and skins at that time).
     pub fn inputs<'m>(
         &self,
         scene: &Scene,
         gpu_scene: &'m GpuScene,
         textures: &GpuTextures,
         materials: &'m GBufferMaterials,
-        transforms: &[Mat4],
+        t: f32,
     ) -> Result<GBufferInputs<'m>> {
-        if transforms.len() != scene.instances.len() {
-            bail!("{} transforms for {} instances", transforms.len(), scene.instances.len());
-        }
+        let node_world = scene.node_world_transforms(Some(t));
+        let transforms = scene.instance_transforms_from(&node_world);
         let mut inputs = self.inputs_for_slots(scene, gpu_scene, textures, materials, 1)?;
-        inputs.write_slot(0, transforms, 0)?;
+        inputs.write_slot(0, scene, &node_world, &transforms, 0)?;
         Ok(inputs)
     }
 
@@ -232,7 +247,8 @@ impl GBufferPass {
         set.storage_buffer(GBUFFER_BINDING_DRAWS, &draws)
             .storage_buffer(GBUFFER_BINDING_MATERIALS, &materials.buffer)
             .combined_image_samplers(GBUFFER_BINDING_TEXTURES, &textures.bindings());
-        Ok(GBufferInputs { draws, geometry: gpu_scene, _materials: materials, set, order, draw_of, slots })
+        let deformed = DeformedStreams::new(&self.device, scene, gpu_scene, slots)?;
+        Ok(GBufferInputs { draws, geometry: gpu_scene, _materials: materials, set, order, draw_of, deformed, slots })
     }
 
     /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
@@ -307,7 +323,7 @@ impl GBufferPass {
             let first_draw = slot as usize * inputs.order.len();
             for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {
                 let primitive = &inputs.geometry.meshes[mesh].primitives[p];
-                let buffers = [
+                let mut buffers = [
                     primitive.positions.raw,
                     primitive.normals.raw,
                     primitive.uvs.raw,
@@ -316,8 +332,20 @@ impl GBufferPass {
                     primitive.dpdv.raw,
                     primitive.uvs1.raw,
                 ];
+                let mut offsets = [0; 7];
+                // A deformed instance's moving streams: this slot's copy.
+                if let Some(moving) = inputs.deformed.of_instance(inputs.draw_of[draw_index].0) {
+                    let moving = &moving.primitives[p];
+                    let offset = moving.offset(slot);
+                    for (stream, buffer) in
+                        [(0, &moving.positions), (1, &moving.normals), (4, &moving.dpdu), (5, &moving.dpdv)]
+                    {
+                        buffers[stream] = buffer.raw;
+                        offsets[stream] = offset;
+                    }
+                }
                 unsafe {
-                    device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &[0; 7]);
+                    device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &offsets);
                     device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
                     // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).
                     device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, (first_draw + draw_index) as u32);

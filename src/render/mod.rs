@@ -3,6 +3,7 @@
 pub mod accumulate;
 pub mod accumulate_layout;
 pub mod aov;
+pub mod deformed;
 pub mod environment;
 pub mod frame;
 pub mod gbuffer;

@@ -14,6 +14,8 @@ pub struct RayScene {
     /// Per mesh: its BLAS (`None` for a mesh without triangles) and the index of its first primitive record.
     blases: Vec<Option<(AccelerationStructure, u32)>>,
     pub records: Buffer,
+    /// `records` on the host, for frames that append deformed instances' records (render::deformed).
+    pub record_list: Vec<GpuPrimitiveRecord>,
     /// Instances that have geometry, in scene order: what the TLAS holds.
     pub traced_instances: Vec<usize>,
     /// Some geometry is alpha-tested (glTF MASK or BLEND): not opaque to rays, so ray queries must look at its
@@ -26,11 +28,7 @@ impl RayScene {
     pub fn build(device: &Arc<Device>, scene: &Scene, geometry: &GpuScene, default_material: u32) -> Result<Self> {
         let mut blases = Vec::with_capacity(geometry.meshes.len());
         let mut records = Vec::new();
-        // As the raster pass sees them: MASK cuts out below its cutoff, BLEND keeps alpha of the samples
-        // (material.glsl's alpha_test_passes).
-        let opaque = |material: Option<usize>| {
-            material.and_then(|m| scene.materials.get(m)).is_none_or(|m| m.alpha_mode == AlphaMode::Opaque)
-        };
+        let opaque = |material: Option<usize>| is_opaque(scene, material);
         let mut alpha_tested = false;
         for mesh in &geometry.meshes {
             if mesh.primitives.is_empty() {
@@ -72,8 +70,9 @@ impl RayScene {
         if records.is_empty() {
             records.push(bytemuck::Zeroable::zeroed());
         }
+        let record_list = records;
         let records =
-            Buffer::with_data(device, "primitive records", &records, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
+            Buffer::with_data(device, "primitive records", &record_list, vk::BufferUsageFlags::STORAGE_BUFFER, 16)?;
         let traced_instances = scene
             .instances
             .iter()
@@ -81,18 +80,39 @@ impl RayScene {
             .filter(|(_, i)| matches!(blases.get(i.mesh), Some(Some(_))))
             .map(|(index, _)| index)
             .collect();
-        Ok(Self { blases, records, traced_instances, alpha_tested })
+        Ok(Self { blases, records, record_list, traced_instances, alpha_tested })
     }
 
     /// TLAS instances for the scene's instance transforms at one time (`transforms` in scene instance order).
     pub fn tlas_instances<'a>(&'a self, scene: &Scene, transforms: &[Mat4]) -> Vec<TlasInstance<'a>> {
+        self.tlas_instances_with(scene, transforms, |_| None)
+    }
+
+    /// `tlas_instances`, with the BLAS and first primitive record of some instances replaced: `own(i)` gives scene
+    /// instance i's own (a deformed instance's, for one sample), or None for its mesh's.
+    pub fn tlas_instances_with<'a>(
+        &'a self,
+        scene: &Scene,
+        transforms: &[Mat4],
+        own: impl Fn(usize) -> Option<(&'a AccelerationStructure, u32)>,
+    ) -> Vec<TlasInstance<'a>> {
         self.traced_instances
             .iter()
             .filter_map(|&i| {
-                let (blas, first) = self.blases[scene.instances[i].mesh].as_ref()?;
+                let (blas, first) = match own(i) {
+                    Some(own) => own,
+                    None => self.blases[scene.instances[i].mesh].as_ref().map(|(b, f)| (b, *f))?,
+                };
                 let transform = transforms.get(i).copied().filter(|m| m.is_finite()).unwrap_or(Mat4::ZERO);
-                Some(TlasInstance { blas, transform, custom_index: *first, mask: 0xFF })
+                Some(TlasInstance { blas, transform, custom_index: first, mask: 0xFF })
             })
             .collect()
     }
+}
+
+/// Whether rays may take a primitive with `material` as opaque, as the raster pass sees it: MASK cuts out below its
+/// cutoff, BLEND keeps alpha of the samples (material.glsl's alpha_test_passes), so both need their candidates
+/// looked at.
+pub fn is_opaque(scene: &Scene, material: Option<usize>) -> bool {
+    material.and_then(|m| scene.materials.get(m)).is_none_or(|m| m.alpha_mode == AlphaMode::Opaque)
 }

@@ -6,6 +6,7 @@ use super::accumulate::counter_bytes;
 use super::accumulate_layout::{
     AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT, COUNTER_SECONDARY_RAYS, COUNTER_SHADOW_RAYS,
 };
+use super::deformed::DeformedRays;
 use super::gbuffer::GBufferInputs;
 use super::lights::LightSet;
 use super::ray_scene::RayScene;
@@ -87,6 +88,8 @@ pub struct SampleSlots<'a> {
     rest: Vec<Mat4>,
     radius: f32,
     pub tlas: DynamicTlas,
+    /// Deformed instances' BLASes and the primitive records with theirs; None when nothing deforms.
+    pub deformed_rays: Option<DeformedRays>,
     pub lights: Buffer,
     pub counters: Buffer,
     pub cameras: Buffer,
@@ -106,6 +109,10 @@ impl<'a> SampleSlots<'a> {
         batch: u32,
     ) -> Result<Self> {
         let tlas = DynamicTlas::new(device, "scene TLAS", ray_scene.traced_instances.len() as u32, batch)?;
+        let deformed_rays = match draws.deformed.is_empty() {
+            true => None,
+            false => Some(DeformedRays::new(device, scene, draws.geometry(), ray_scene, &draws.deformed)?),
+        };
         let rest = scene.node_world_transforms(None);
         let radius = scene.bounds().map(|(lo, hi)| (hi - lo).length() * 0.5).unwrap_or(1.0);
         let first = lights_at(scene, &rest, radius, scene.shutter.0).0;
@@ -128,6 +135,7 @@ impl<'a> SampleSlots<'a> {
             rest,
             radius,
             tlas,
+            deformed_rays,
             draws,
             light_capacity,
             skipped_warned: false,
@@ -140,8 +148,16 @@ impl<'a> SampleSlots<'a> {
         let (width, height) = (self.settings.width, self.settings.height);
         let (t, camera_sample, camera) = camera_sample_at(self.scene, self.settings, index);
         // Node transforms once per sample: instances (TLAS, draws) and lights all come from them.
-        let (set, transforms) = lights_at(self.scene, &self.rest, self.radius, t);
-        self.tlas.write_slot(slot, &self.ray_scene.tlas_instances(self.scene, &transforms))?;
+        let (set, node_world, transforms) = lights_at(self.scene, &self.rest, self.radius, t);
+        // Deformed instances first: their BLAS and records in this slot stand in for their mesh's.
+        self.draws.write_slot(slot, self.scene, &node_world, &transforms, coverage_key(frame.seed, index))?;
+        let own = |i: usize| {
+            let rays = self.deformed_rays.as_ref()?;
+            let k = self.draws.deformed.index_of(i)?;
+            Some(rays.instance_in_slot(k, slot))
+        };
+        let instances = self.ray_scene.tlas_instances_with(self.scene, &transforms, own);
+        self.tlas.write_slot(slot, &instances)?;
         if set.skipped_triangles > 0 && !self.skipped_warned {
             self.skipped_warned = true;
             eprintln!(
@@ -153,7 +169,6 @@ impl<'a> SampleSlots<'a> {
         let light_count = set.lights.len().min(self.light_capacity);
         let light_bytes = (self.light_capacity * std::mem::size_of::<GpuLight>()) as u64;
         self.lights.write(u64::from(slot) * light_bytes, bytemuck::cast_slice(&set.lights[..light_count]))?;
-        self.draws.write_slot(slot, &transforms, coverage_key(frame.seed, index))?;
         let camera_bytes = std::mem::size_of::<GpuCamera>() as u64;
         self.cameras.write(u64::from(slot) * camera_bytes, bytemuck::bytes_of(&gpu_camera(&camera, width, height)))?;
         let orthographic = matches!(camera.projection, Projection::Orthographic { .. });
@@ -173,6 +188,19 @@ impl<'a> SampleSlots<'a> {
         Ok(SampleRecord { camera: camera_sample, push })
     }
 
+    /// The primitive records the accumulation pass reads: the scene's, with the deformed instances' per slot.
+    pub fn primitive_records(&self) -> &Buffer {
+        self.deformed_rays.as_ref().map_or(&self.ray_scene.records, |d| &d.records)
+    }
+
+    /// Records sample `slot`'s acceleration-structure builds: the deformed instances' BLASes, then the TLAS.
+    pub fn record_builds(&self, cmd: vk::CommandBuffer, slot: u32) {
+        if let Some(deformed) = &self.deformed_rays {
+            deformed.record_builds(cmd, slot);
+        }
+        self.tlas.record_build(cmd, slot);
+    }
+
     /// Zeroes the ray counters (and tile queues) of `slots` slots before a batch.
     pub fn reset_counters(&mut self, slots: u32) -> Result<()> {
         self.counters.write(0, &vec![0u8; counter_bytes(slots) as usize])
@@ -189,9 +217,9 @@ impl<'a> SampleSlots<'a> {
     }
 }
 
-/// The lights at time `t` and the instance transforms they come from.
-fn lights_at(scene: &Scene, rest: &[Mat4], radius: f32, t: f32) -> (LightSet, Vec<Mat4>) {
+/// The lights at time `t`, and the node and instance transforms they come from.
+fn lights_at(scene: &Scene, rest: &[Mat4], radius: f32, t: f32) -> (LightSet, Vec<Mat4>, Vec<Mat4>) {
     let moved = scene.node_world_transforms(Some(t));
     let transforms = scene.instance_transforms_from(&moved);
-    (LightSet::at(scene, &moved, &transforms, rest, radius), transforms)
+    (LightSet::at(scene, &moved, &transforms, rest, radius), moved, transforms)
 }

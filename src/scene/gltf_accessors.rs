@@ -162,6 +162,9 @@ pub fn attribute_formats(
         (gltf::Semantic::Tangents, false) => (&[Vec4], FLOAT),
         (gltf::Semantic::TexCoords(_), false) => (&[Vec2], UV),
         (gltf::Semantic::Colors(_), _) => (&[Vec3, Vec4], UV),
+        // §3.7.3.2: joint indices are unsigned integers; weights floats or normalized unsigned integers.
+        (gltf::Semantic::Joints(_), _) => (&[Vec4], &[(U8, false), (U16, false)]),
+        (gltf::Semantic::Weights(_), _) => (&[Vec4], UV),
         _ => return None,
     })
 }

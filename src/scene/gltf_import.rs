@@ -85,7 +85,9 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
     }
     let node_meshes = meshes_at_node_weights(document, &buffers, &mut scene)?;
     check_variant_mappings(&scene)?;
+    scene.skins = super::gltf_skin::import_skins(document, &buffers)?;
     import_nodes(document, &buffers, &mut scene, &node_meshes)?;
+    super::gltf_skin::check_skinned_meshes(&scene)?;
     for animation in document.animations() {
         let a = import_animation(&animation, &buffers, &scene)
             .with_context(|| format!("animation {}", animation.index()))?;
@@ -103,12 +105,6 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
         })
         .collect();
     scene.warnings.extend(unsupported_channels);
-    for node in document.nodes().filter(|n| n.skin().is_some() && n.mesh().is_some()) {
-        scene.warnings.push(format!(
-            "node {} is skinned, which strata does not support: its mesh is drawn unskinned, as the node places it",
-            node.index()
-        ));
-    }
     Ok(scene)
 }
 
@@ -383,6 +379,7 @@ fn import_nodes(
             camera: None,
             light: None,
             category: category_of(&n),
+            skin: n.skin().filter(|_| n.mesh().is_some()).map(|s| s.index()),
         })
         .collect();
     link_parents(scene)?;
@@ -399,7 +396,9 @@ fn import_nodes(
                 .with_context(|| format!("node \"{name}\": EXT_mesh_gpu_instancing"))?;
             for (k, node_from_object) in copies.iter().enumerate() {
                 let name = if copies.len() == 1 { name.clone() } else { format!("{name} #{k}") };
-                let world_from_object = world[i] * *node_from_object;
+                // A skinned mesh is placed by its joints, not its node (§3.7.3.3).
+                let skinned = scene.nodes[i].skin.is_some();
+                let world_from_object = if skinned { Mat4::IDENTITY } else { world[i] * *node_from_object };
                 scene.instances.push(Instance {
                     name,
                     mesh,

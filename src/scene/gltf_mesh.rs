@@ -2,6 +2,7 @@
 //! at the mesh's or a node's weights, flat normals where the file has none, and the surface derivatives bump
 //! mapping needs.
 use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact, read_floats};
+use super::skin::JointInfluences;
 use super::surface::compute_surface_derivatives;
 use super::{Mesh, Primitive, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
@@ -156,12 +157,47 @@ fn import_primitive(
     if p.uvs.iter().chain(&p.uvs1).any(|uv| !uv.is_finite()) {
         bail!("texture coordinates hold non-finite values");
     }
+    p.skin_influences = joint_influences(primitive, buffers, p.positions.len())?;
     apply_morph_targets(primitive, buffers, weights, quantized, &mut p)?;
     if p.normals.is_empty() {
         flatten_with_face_normals(&mut p);
     }
     compute_surface_derivatives(&mut p);
     Ok(p)
+}
+
+/// Every `JOINTS_n`/`WEIGHTS_n` pair of the primitive (§3.7.3.2), from set 0 up to the first missing one; a set
+/// with one half and not the other is an error, as are weights that are negative or not finite.
+fn joint_influences(
+    primitive: &gltf::Primitive<'_>,
+    buffers: &[Vec<u8>],
+    vertices: usize,
+) -> Result<Vec<JointInfluences>> {
+    let mut sets = Vec::new();
+    for set in 0.. {
+        let joints = primitive.get(&gltf::Semantic::Joints(set));
+        let weights = primitive.get(&gltf::Semantic::Weights(set));
+        let (joints, weights) = match (joints, weights) {
+            (None, None) => break,
+            (Some(j), Some(w)) => (j, w),
+            (Some(_), None) => bail!("JOINTS_{set} has no WEIGHTS_{set}"),
+            (None, Some(_)) => bail!("WEIGHTS_{set} has no JOINTS_{set}"),
+        };
+        let joints = read_floats::<4>(&format!("JOINTS_{set}"), &joints, buffers)?;
+        let weights = read_floats::<4>(&format!("WEIGHTS_{set}"), &weights, buffers)?;
+        if joints.len() != vertices || weights.len() != vertices {
+            bail!("JOINTS_{set}/WEIGHTS_{set} have {}/{} entries for {vertices} vertices", joints.len(), weights.len());
+        }
+        if let Some(v) = weights.iter().position(|w| w.iter().any(|x| !x.is_finite() || *x < 0.0)) {
+            bail!("WEIGHTS_{set} of vertex {v} is negative or not finite ({:?})", weights[v]);
+        }
+        sets.push(JointInfluences {
+            // Read as floats from U8/U16 components (check_format allows no other), so each converts exactly.
+            joints: joints.into_iter().map(|j| j.map(|x| x as u16)).collect(),
+            weights: weights.into_iter().map(Vec4::from_array).collect(),
+        });
+    }
+    Ok(sets)
 }
 
 /// Adds each morph target's displacements of POSITION, NORMAL and TANGENT, times its weight, to the base
@@ -254,6 +290,10 @@ fn flatten_with_face_normals(p: &mut Primitive) {
     p.uvs = gather(&p.uvs, &p.indices);
     p.uvs1 = gather(&p.uvs1, &p.indices);
     p.colors = gather(&p.colors, &p.indices);
+    for set in &mut p.skin_influences {
+        set.joints = gather(&set.joints, &p.indices);
+        set.weights = gather(&set.weights, &p.indices);
+    }
     p.normals = normals;
     p.indices = (0..p.positions.len() as u32).collect();
 }

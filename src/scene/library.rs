@@ -34,6 +34,7 @@ pub fn place(scene: &mut Scene, name: &str, mut primitive: Primitive, world_from
         camera: None,
         light: None,
         category: None,
+        skin: None,
     });
     scene.roots.push(node);
     let node_from_object = Mat4::IDENTITY;

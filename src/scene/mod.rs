@@ -12,6 +12,7 @@ mod gltf_instancing;
 mod gltf_material;
 mod gltf_mesh;
 mod gltf_meshopt;
+mod gltf_skin;
 pub mod gltf_uri;
 pub mod image_decode;
 pub mod library;
@@ -21,6 +22,7 @@ pub mod motion;
 pub mod scene_file;
 pub mod settings;
 pub mod shapes;
+pub mod skin;
 pub mod surface;
 
 pub use animation::{Animation, Channel, Interpolation, Property};
@@ -57,6 +59,8 @@ pub struct Primitive {
     /// `KHR_materials_variants`: (variant, material) pairs; the chosen variant's material replaces `material`
     /// (Scene::select_variant).
     pub variant_materials: Vec<(usize, usize)>,
+    /// `JOINTS_n`/`WEIGHTS_n`, one entry per set (each as long as `positions`); empty for a mesh without skin data.
+    pub skin_influences: Vec<skin::JointInfluences>,
 }
 
 impl Primitive {
@@ -111,6 +115,8 @@ pub struct Node {
     /// Its semantic class (`--aov semantic`): the glTF node's `extras.category_id`, or what a scene file's
     /// `[[semantic]]` table gives it; None: its parent's.
     pub category: Option<u32>,
+    /// The skin (index into `Scene::skins`) that deforms the node's mesh.
+    pub skin: Option<usize>,
 }
 
 /// A mesh placed in the world by a node (at the rest pose, without animation).
@@ -143,6 +149,7 @@ pub struct Scene {
     pub camera: Option<Camera>,
     pub lights: Vec<Light>,
     pub animations: Vec<Animation>,
+    pub skins: Vec<skin::Skin>,
     /// Extra motion of nodes over the shutter (scene file), on top of glTF animation.
     pub node_motion: Vec<NodeMotion>,
     /// Camera motion over the shutter (scene file).
@@ -164,7 +171,16 @@ impl Scene {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        for instance in &self.instances {
+        let rest = self.skins.is_empty().then(Vec::new).unwrap_or_else(|| self.node_world_transforms(None));
+        for (i, instance) in self.instances.iter().enumerate() {
+            // A skinned instance at its rest pose: its vertices as the skin places them.
+            if let Some(deformed) = self.deform_instance(i, &rest) {
+                for &w in deformed.iter().flat_map(|d| &d.positions) {
+                    lo = lo.min(w);
+                    hi = hi.max(w);
+                }
+                continue;
+            }
             for primitive in &self.meshes[instance.mesh].primitives {
                 for &p in &primitive.positions {
                     let w = instance.world_from_object.transform_point3(p);
@@ -312,11 +328,17 @@ impl Scene {
         self.instance_transforms_from(&self.node_world_transforms(Some(t)))
     }
 
-    /// Each instance's world transform given every node's (from `node_world_transforms`).
+    /// Each instance's world transform given every node's (from `node_world_transforms`). A skinned instance's
+    /// is the identity: its joints place its vertices in the world (§3.7.3.3, `skin`).
     pub fn instance_transforms_from(&self, node_world: &[Mat4]) -> Vec<Mat4> {
-        self.instances
-            .iter()
-            .map(|i| i.node.and_then(|n| node_world.get(n)).map_or(i.world_from_object, |w| *w * i.node_from_object))
+        (0..self.instances.len())
+            .map(|index| {
+                let i = &self.instances[index];
+                if self.instance_skin(index).is_some() {
+                    return Mat4::IDENTITY;
+                }
+                i.node.and_then(|n| node_world.get(n)).map_or(i.world_from_object, |w| *w * i.node_from_object)
+            })
             .collect()
     }
 }

@@ -83,22 +83,7 @@ impl AccelerationStructure {
         if geometries.is_empty() {
             bail!("BLAS \"{name}\": no geometry");
         }
-        let raw_geometries: Vec<vk::AccelerationStructureGeometryKHR> = geometries
-            .iter()
-            .map(|g| {
-                let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
-                    .vertex_format(vk::Format::R32G32B32_SFLOAT)
-                    .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: g.vertex_address })
-                    .vertex_stride(g.vertex_stride)
-                    .max_vertex(g.vertex_count.saturating_sub(1))
-                    .index_type(vk::IndexType::UINT32)
-                    .index_data(vk::DeviceOrHostAddressConstKHR { device_address: g.index_address });
-                vk::AccelerationStructureGeometryKHR::default()
-                    .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
-                    .geometry(vk::AccelerationStructureGeometryDataKHR { triangles })
-                    .flags(if g.opaque { vk::GeometryFlagsKHR::OPAQUE } else { vk::GeometryFlagsKHR::empty() })
-            })
-            .collect();
+        let raw_geometries: Vec<vk::AccelerationStructureGeometryKHR> = geometries.iter().map(triangles).collect();
         let counts: Vec<u32> = geometries.iter().map(|g| g.triangle_count).collect();
         Self::build(device, name, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, &raw_geometries, &counts)
     }
@@ -171,6 +156,21 @@ impl AccelerationStructure {
         };
         Ok(Self { raw, address, name: name.to_owned(), _storage: storage, device: device.clone() })
     }
+}
+
+/// One triangle geometry as a build reads it.
+fn triangles(g: &TriangleGeometry) -> vk::AccelerationStructureGeometryKHR<'static> {
+    let triangles = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+        .vertex_format(vk::Format::R32G32B32_SFLOAT)
+        .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: g.vertex_address })
+        .vertex_stride(g.vertex_stride)
+        .max_vertex(g.vertex_count.saturating_sub(1))
+        .index_type(vk::IndexType::UINT32)
+        .index_data(vk::DeviceOrHostAddressConstKHR { device_address: g.index_address });
+    vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { triangles })
+        .flags(if g.opaque { vk::GeometryFlagsKHR::OPAQUE } else { vk::GeometryFlagsKHR::empty() })
 }
 
 /// What every build here asks for: a full build, tuned for tracing.
@@ -285,27 +285,79 @@ impl DynamicTlas {
             .dst_acceleration_structure(self.structure.raw)
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: self.scratch.address });
         let ranges = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(self.instance_count)];
-        let device = &self.device;
-        // The previous build (scratch and structure writes) and the ray queries that read its result must be
-        // done before this one overwrites both.
-        let before = Access {
-            stage: vk::PipelineStageFlags2::from_raw(
-                Access::AS_BUILD_WRITE.stage.as_raw() | Access::AS_COMPUTE_READ.stage.as_raw(),
-            ),
-            access: vk::AccessFlags2::from_raw(
-                vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
-                    | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
-            ),
-        };
-        let build = Access {
-            stage: Access::AS_BUILD_WRITE.stage,
-            access: vk::AccessFlags2::from_raw(
-                vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
-                    | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
-            ),
-        };
-        memory_barrier(device, cmd, before, build);
-        unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[build_info], &[&ranges]) };
-        memory_barrier(device, cmd, Access::AS_BUILD_WRITE, Access::AS_COMPUTE_READ);
+        record_rebuild(&self.device, cmd, build_info, &ranges);
+    }
+}
+
+/// Records a build into `build_info`'s destination, which earlier builds and ray queries in compute shaders may
+/// still be using: first a barrier after them (scratch and structure writes, reads of the old result), then the
+/// build, then a barrier that makes the result visible to ray queries in compute shaders.
+fn record_rebuild(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    build_info: vk::AccelerationStructureBuildGeometryInfoKHR<'_>,
+    ranges: &[vk::AccelerationStructureBuildRangeInfoKHR],
+) {
+    // The previous build (scratch and structure writes) and the ray queries that read its result must be
+    // done before this one overwrites both.
+    let before = Access {
+        stage: vk::PipelineStageFlags2::from_raw(
+            Access::AS_BUILD_WRITE.stage.as_raw() | Access::AS_COMPUTE_READ.stage.as_raw(),
+        ),
+        access: vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
+                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
+        ),
+    };
+    let build = Access {
+        stage: Access::AS_BUILD_WRITE.stage,
+        access: vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
+                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
+        ),
+    };
+    memory_barrier(device, cmd, before, build);
+    unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[build_info], &[ranges]) };
+    memory_barrier(device, cmd, Access::AS_BUILD_WRITE, Access::AS_COMPUTE_READ);
+}
+
+/// A BLAS rebuilt many times over geometry of the same shape whose vertices move (a deformed instance, once per
+/// sample): storage and scratch are allocated once, for the first geometries' counts; each rebuild may read its
+/// vertices from another address.
+pub struct DynamicBlas {
+    pub structure: AccelerationStructure,
+    scratch: Buffer,
+    counts: Vec<u32>,
+    device: Arc<Device>,
+}
+
+impl DynamicBlas {
+    pub fn new(device: &Arc<Device>, name: &str, geometries: &[TriangleGeometry]) -> Result<Self> {
+        if geometries.is_empty() {
+            bail!("BLAS \"{name}\": no geometry");
+        }
+        let raw: Vec<vk::AccelerationStructureGeometryKHR> = geometries.iter().map(triangles).collect();
+        let counts: Vec<u32> = geometries.iter().map(|g| g.triangle_count).collect();
+        let kind = vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL;
+        let sizes = build_sizes(device, kind, &raw, &counts);
+        let structure = AccelerationStructure::allocate(device, name, kind, sizes.acceleration_structure_size)?;
+        let scratch = scratch_buffer(device, name, sizes.build_scratch_size)?;
+        Ok(Self { structure, scratch, counts, device: device.clone() })
+    }
+
+    /// Records a full rebuild from `geometries` (the same triangle counts as at creation), between the barriers
+    /// of `record_rebuild`. The caller orders it after the writes of the vertices it reads.
+    pub fn record_build(&self, cmd: vk::CommandBuffer, geometries: &[TriangleGeometry]) {
+        let raw: Vec<vk::AccelerationStructureGeometryKHR> = geometries.iter().map(triangles).collect();
+        debug_assert_eq!(geometries.iter().map(|g| g.triangle_count).collect::<Vec<_>>(), self.counts);
+        let build_info = build_info(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, &raw)
+            .dst_acceleration_structure(self.structure.raw)
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: self.scratch.address });
+        let ranges: Vec<vk::AccelerationStructureBuildRangeInfoKHR> = self
+            .counts
+            .iter()
+            .map(|&count| vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count))
+            .collect();
+        record_rebuild(&self.device, cmd, build_info, &ranges);
     }
 }
