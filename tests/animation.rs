@@ -273,7 +273,7 @@ fn simple_skin_vertices_at_its_keyframes_are_where_the_tutorial_puts_them() {
     let file_vertex = |i: usize| Vec3::new((i % 2) as f32, (i / 2) as f32 * 0.5, 0.0);
     for (t, theta) in [(0.0, 0.0), (0.5, std::f32::consts::FRAC_PI_4), (1.0, std::f32::consts::FRAC_PI_2)] {
         let node_world = scene.node_world_transforms(Some(t));
-        let skinned = scene.deform_instance(0, &node_world).unwrap();
+        let skinned = scene.deform_instance(0, &node_world, Some(t)).unwrap();
         for (p, &q) in rest.positions.iter().zip(&skinned[0].positions) {
             // The file's keys are rounded to 3 digits (0.383, 0.924, 0.707).
             let want = hand_skinned(*p, theta);
@@ -445,4 +445,77 @@ fn a_skin_naming_a_joint_it_does_not_have_is_an_error_that_says_so() {
     assert!(err.contains("bad-skin.gltf") && err.contains("names joint 1, but the skin has 1"), "{err}");
     let out = strata(&["info".as_ref(), file.as_os_str()]);
     assert!(!out.status.success(), "{}", outcome(&out));
+}
+
+// ---- Animated morph weights (glTF 2.0 §3.7.2.2, §3.11) on MorphStressTest: one node, one mesh of two primitives
+// with 8 targets each; its first clip (Individuals) drives the weights with 225 LINEAR keys.
+
+/// MorphStressTest with the clip's weights at key `k` written as the mesh's static weights and no animations.
+fn morph_stress_at_static_weights(weights: &[f32]) -> strata::scene::Scene {
+    let text = std::fs::read_to_string(common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["meshes"][0]["weights"] = json!(weights);
+    doc.as_object_mut().unwrap().remove("animations");
+    let dir = temp_dir(&format!("morph-static-{}", weights.iter().map(|w| w.to_bits()).sum::<u32>()));
+    let file = dir.join("MorphStressTest-static.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    strata::load_scene(&file).unwrap()
+}
+
+fn morph_stress_keys(scene: &strata::scene::Scene) -> Vec<(f32, Vec<f32>)> {
+    let channel = &scene.animations[0].channels[0];
+    assert_eq!(channel.property, strata::scene::Property::Weights);
+    channel.times.iter().map(|&t| (t, channel.sample_weights(t))).collect()
+}
+
+#[test]
+fn animated_morph_weights_at_a_key_give_the_bits_of_those_weights_set_statically() {
+    let animated = strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    assert!(animated.warnings.is_empty(), "{:?}", animated.warnings);
+    assert_eq!(animated.deformed_instances(), vec![0]);
+    let keys = morph_stress_keys(&animated);
+    // Keys where several targets are partly on, and one where all are off.
+    let chosen: Vec<usize> = [30, 95, 160, 0].into_iter().filter(|&k| k < keys.len()).collect();
+    assert!(keys[30].1.iter().chain(&keys[95].1).any(|&w| w > 0.0 && w < 1.0), "{:?}", &keys[30]);
+    for k in chosen {
+        let (t, weights) = &keys[k];
+        let fixed = morph_stress_at_static_weights(weights);
+        let deformed = animated.deform_instance(0, &animated.node_world_transforms(Some(*t)), Some(*t)).unwrap();
+        for (p, (d, f)) in deformed.iter().zip(&fixed.meshes[0].primitives).enumerate() {
+            assert!(d.positions == f.positions, "key {k} (t = {t}), primitive {p}: positions differ");
+            assert!(d.normals == f.normals, "key {k}, primitive {p}: normals differ");
+            assert!(d.dpdu == f.dpdu && d.dpdv == f.dpdv, "key {k}, primitive {p}: surface derivatives differ");
+        }
+    }
+    // Between keys the weights interpolate, and so do the vertices: not the rest pose.
+    let (t0, t1) = (keys[30].0, keys[31].0);
+    let between = animated.deform_instance(0, &animated.node_world_transforms(None), Some(0.5 * (t0 + t1))).unwrap();
+    let rest = &animated.meshes[0].primitives;
+    assert!(between.iter().zip(rest).any(|(d, r)| d.positions != r.positions), "the mesh moves between keys");
+}
+
+#[test]
+fn a_morphing_mesh_renders_at_a_key_as_its_static_twin_and_blurs_between_keys() {
+    use strata::scene::settings::SamplerKind;
+    let gpu = GpuTest::new();
+    let mut animated =
+        strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    let (t, weights) = morph_stress_keys(&animated)[95].clone();
+    let mut fixed = morph_stress_at_static_weights(&weights);
+    // One camera and key light for both (a default camera would frame each one's rest pose, and those differ).
+    animated.camera = Some(animated.camera_or_default());
+    fixed.camera = animated.camera.clone();
+    animated.add_default_light();
+    fixed.add_default_light();
+    animated.shutter = (t, t);
+    let s = settings(48, 48, 2, SamplerKind::MultiJittered);
+    let (a, b) = (render(gpu.device(), &animated, &s), render(gpu.device(), &fixed, &s));
+    assert!(a.linear.pixels.iter().filter(|p| p[3] > 0.0).count() > 300, "the mesh is in view");
+    assert!(a.linear == b.linear, "animated weights at a key must render as those weights set statically");
+    // Over an open shutter the weights change, and the picture with them.
+    animated.shutter = (t, t + 1.0);
+    let c = render(gpu.device(), &animated, &s);
+    assert!(c.linear != a.linear, "an open shutter over changing weights must not be the still frame");
+    drop((a, b, c));
+    gpu.finish().unwrap();
 }

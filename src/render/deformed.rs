@@ -1,6 +1,6 @@
-//! Deformed instances on the GPU (docs/architecture.md, "Deformed meshes"): a skinned instance's positions, normals
+//! Deformed instances on the GPU (docs/architecture.md, "Deformed meshes"): a skinned or morphing instance's positions, normals
 //! and surface derivatives change with time, so each sample of a batch gets its own copy of them, written by the
-//! host at the sample's shutter time (`scene::skin`), and its own BLAS, rebuilt from that copy in the sample's
+//! host at the sample's shutter time (`scene::skin`, `scene::morph`), and its own BLAS, rebuilt from that copy in the sample's
 //! commands before the TLAS that places it. The streams that do not move (UVs, colours, indices) stay the mesh's.
 use super::accumulate_layout::GpuPrimitiveRecord;
 use super::gpu_scene::{GpuPrimitive, GpuScene};
@@ -91,13 +91,13 @@ impl DeformedStreams {
         self.index_of.get(instance).copied().flatten()
     }
 
-    /// Deforms every instance for the node transforms `node_world` (one sample's time) into `slot`.
-    pub fn write_slot(&mut self, slot: u32, scene: &Scene, node_world: &[Mat4]) -> Result<()> {
+    /// Deforms every instance at time `t`, whose node transforms are `node_world`, into `slot`.
+    pub fn write_slot(&mut self, slot: u32, scene: &Scene, node_world: &[Mat4], t: f32) -> Result<()> {
         if slot >= self.slots {
             bail!("deformed streams: slot {slot} of {}", self.slots);
         }
         for deformed in &mut self.instances {
-            let vertices = scene.deform_instance(deformed.instance, node_world).unwrap_or_default();
+            let vertices = scene.deform_instance(deformed.instance, node_world, Some(t)).unwrap_or_default();
             // GpuScene leaves out primitives without triangles; so do the streams.
             let mesh = &scene.meshes[scene.instances[deformed.instance].mesh];
             let kept = mesh.primitives.iter().zip(vertices).filter(|(p, _)| !p.indices.is_empty()).map(|(_, v)| v);

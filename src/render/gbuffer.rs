@@ -102,27 +102,28 @@ impl<'m> GBufferInputs<'m> {
         self.geometry
     }
 
-    /// Writes the draws of `slot` for one sample's time: each instance at its transform (`transforms`, one per
+    /// Writes the draws of `slot` for one sample's time `t`: each instance at its transform (`transforms`, one per
     /// scene instance, from the node transforms `node_world`), deformed instances deformed, with the sample's BLEND
     /// coverage key. The GPU must not be reading that slot.
     pub fn write_slot(
         &mut self,
         slot: u32,
         scene: &Scene,
-        node_world: &[Mat4],
+        pose: (f32, &[Mat4]),
         transforms: &[Mat4],
-        coverage_key: u32,
+        key: u32,
     ) -> Result<()> {
         if slot >= self.slots {
             bail!("gbuffer draws: slot {slot} of {}", self.slots);
         }
-        self.deformed.write_slot(slot, scene, node_world)?;
+        let (t, node_world) = pose;
+        self.deformed.write_slot(slot, scene, node_world, t)?;
         let records: Vec<GBufferDraw> = self
             .draw_of
             .iter()
             .map(|&(instance, material)| {
                 let transform = transforms.get(instance).copied().unwrap_or(Mat4::ZERO);
-                GBufferDraw::new(transform, material, instance as u32, coverage_key)
+                GBufferDraw::new(transform, material, instance as u32, key)
             })
             .collect();
         let offset = u64::from(slot) * (self.order.len() * std::mem::size_of::<GBufferDraw>()) as u64;
@@ -211,7 +212,7 @@ impl GBufferPass {
         let node_world = scene.node_world_transforms(Some(t));
         let transforms = scene.instance_transforms_from(&node_world);
         let mut inputs = self.inputs_for_slots(scene, gpu_scene, textures, materials, 1)?;
-        inputs.write_slot(0, scene, &node_world, &transforms, 0)?;
+        inputs.write_slot(0, scene, (t, &node_world), &transforms, 0)?;
         Ok(inputs)
     }
 

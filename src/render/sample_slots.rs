@@ -150,7 +150,7 @@ impl<'a> SampleSlots<'a> {
         // Node transforms once per sample: instances (TLAS, draws) and lights all come from them.
         let (set, node_world, transforms) = lights_at(self.scene, &self.rest, self.radius, t);
         // Deformed instances first: their BLAS and records in this slot stand in for their mesh's.
-        self.draws.write_slot(slot, self.scene, &node_world, &transforms, coverage_key(frame.seed, index))?;
+        self.draws.write_slot(slot, self.scene, (t, &node_world), &transforms, coverage_key(frame.seed, index))?;
         let own = |i: usize| {
             let rays = self.deformed_rays.as_ref()?;
             let k = self.draws.deformed.index_of(i)?;

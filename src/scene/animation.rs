@@ -1,5 +1,6 @@
-//! glTF animations: translation, rotation and scale channels sampled at any time t with STEP, LINEAR (slerp for
-//! rotations) and CUBICSPLINE interpolation (glTF 2.0 §3.11 and Appendix C). This is what motion blur reads.
+//! glTF animations: translation, rotation, scale and morph-weight channels sampled at any time t with STEP, LINEAR
+//! (slerp for rotations) and CUBICSPLINE interpolation (glTF 2.0 §3.11 and Appendix C). This is what motion blur
+//! reads.
 use super::NodeTransform;
 use anyhow::{bail, Result};
 use glam::{Quat, Vec3, Vec4};
@@ -9,6 +10,8 @@ pub enum Property {
     Translation,
     Rotation,
     Scale,
+    /// Morph target weights: `width` Vec4s per value, the weights four at a time (the last padded with zeros).
+    Weights,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -19,7 +22,8 @@ pub enum Interpolation {
 }
 
 /// One animated property of one node. `values` holds one entry per key (xyz in a Vec4 for translation and
-/// scale, xyzw for rotation); for CUBICSPLINE, three per key: in-tangent, value, out-tangent.
+/// scale, xyzw for rotation, `width` Vec4s for weights); for CUBICSPLINE, three per key: in-tangent, value,
+/// out-tangent.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Channel {
     pub node: usize,
@@ -27,6 +31,10 @@ pub struct Channel {
     pub interpolation: Interpolation,
     pub times: Vec<f32>,
     pub values: Vec<Vec4>,
+    /// Vec4s per value: 1, or for weights ⌈targets / 4⌉.
+    pub width: usize,
+    /// For weights: how many targets (the rest of the last Vec4 is padding).
+    pub targets: usize,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -44,6 +52,41 @@ impl Channel {
         times: Vec<f32>,
         values: Vec<Vec4>,
     ) -> Result<Self> {
+        Self::with_width(node, property, interpolation, times, values, 1, 0)
+    }
+
+    /// A morph-weight channel: `weights` holds `targets` floats per value (times three per key for CUBICSPLINE).
+    pub fn weights(
+        node: usize,
+        interpolation: Interpolation,
+        times: Vec<f32>,
+        weights: &[f32],
+        targets: usize,
+    ) -> Result<Self> {
+        if targets == 0 || weights.len() % targets != 0 {
+            bail!("morph weight sampler has {} outputs, not a whole number of {targets}-target values", weights.len());
+        }
+        let width = targets.div_ceil(4);
+        let values = weights
+            .chunks(targets)
+            .flat_map(|value| {
+                (0..width).map(move |c| {
+                    Vec4::from_array(std::array::from_fn(|k| value.get(4 * c + k).copied().unwrap_or(0.0)))
+                })
+            })
+            .collect();
+        Self::with_width(node, Property::Weights, interpolation, times, values, width, targets)
+    }
+
+    fn with_width(
+        node: usize,
+        property: Property,
+        interpolation: Interpolation,
+        times: Vec<f32>,
+        values: Vec<Vec4>,
+        width: usize,
+        targets: usize,
+    ) -> Result<Self> {
         if times.is_empty() {
             bail!("animation sampler has no keyframes");
         }
@@ -51,7 +94,7 @@ impl Channel {
             bail!("animation sampler input times must be finite and strictly increasing");
         }
         let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
-        if values.len() != times.len() * per_key {
+        if values.len() != times.len() * per_key * width {
             bail!(
                 "animation sampler has {} outputs for {} keys ({per_key} per key for {interpolation:?})",
                 values.len(),
@@ -61,25 +104,38 @@ impl Channel {
         if values.iter().any(|v| !v.is_finite()) {
             bail!("animation sampler output is not finite");
         }
-        Ok(Self { node, property, interpolation, times, values })
+        Ok(Self { node, property, interpolation, times, values, width, targets })
     }
 
-    fn value(&self, key: usize) -> Vec4 {
+    /// Entry `part` (0 in-tangent, 1 value, 2 out-tangent; plain keys have only the value) of key `key`, Vec4 `c`.
+    fn entry(&self, key: usize, part: usize, c: usize) -> Vec4 {
         match self.interpolation {
-            Interpolation::CubicSpline => self.values[3 * key + 1],
-            _ => self.values[key],
+            Interpolation::CubicSpline => self.values[(3 * key + part) * self.width + c],
+            _ => self.values[key * self.width + c],
         }
     }
 
     /// The property's value at time `t`; before the first key the first value, after the last the last.
     pub fn sample(&self, t: f32) -> Vec4 {
+        self.sample_part(t, 0)
+    }
+
+    /// A weights channel's weights at time `t`, one per target.
+    pub fn sample_weights(&self, t: f32) -> Vec<f32> {
+        let mut weights: Vec<f32> = (0..self.width).flat_map(|c| self.sample_part(t, c).to_array()).collect();
+        weights.truncate(self.targets);
+        weights
+    }
+
+    /// Vec4 `c` of the value at time `t`.
+    fn sample_part(&self, t: f32, c: usize) -> Vec4 {
         let times = &self.times;
         let last = times.len() - 1;
         if t <= times[0] || last == 0 {
-            return self.value(0);
+            return self.entry(0, 1, c);
         }
         if t >= times[last] {
-            return self.value(last);
+            return self.entry(last, 1, c);
         }
         // times[k] <= t < times[k + 1]
         let k = times.partition_point(|&x| x <= t) - 1;
@@ -87,9 +143,9 @@ impl Channel {
         let s = (t - times[k]) / dt;
         let rotation = self.property == Property::Rotation;
         match self.interpolation {
-            Interpolation::Step => self.value(k),
+            Interpolation::Step => self.entry(k, 1, c),
             Interpolation::Linear => {
-                let (a, b) = (self.value(k), self.value(k + 1));
+                let (a, b) = (self.entry(k, 1, c), self.entry(k + 1, 1, c));
                 if rotation {
                     Vec4::from(Quat::from_vec4(a).normalize().slerp(Quat::from_vec4(b).normalize(), s))
                 } else {
@@ -98,10 +154,10 @@ impl Channel {
             }
             Interpolation::CubicSpline => {
                 // Hermite spline, glTF 2.0 Appendix C: tangents are scaled by the key interval.
-                let v0 = self.values[3 * k + 1];
-                let b0 = self.values[3 * k + 2]; // out-tangent of key k
-                let a1 = self.values[3 * (k + 1)]; // in-tangent of key k+1
-                let v1 = self.values[3 * (k + 1) + 1];
+                let v0 = self.entry(k, 1, c);
+                let b0 = self.entry(k, 2, c); // out-tangent of key k
+                let a1 = self.entry(k + 1, 0, c); // in-tangent of key k+1
+                let v1 = self.entry(k + 1, 1, c);
                 let (s2, s3) = (s * s, s * s * s);
                 let p = v0 * (2.0 * s3 - 3.0 * s2 + 1.0)
                     + b0 * (dt * (s3 - 2.0 * s2 + s))
@@ -182,9 +238,15 @@ impl Animation {
         self.channels.iter().filter_map(|c| c.times.last().copied()).fold(0.0, f32::max)
     }
 
+    /// Node `node`'s morph weights at `t`, if the clip animates them.
+    pub fn weights_at(&self, node: usize, t: f32) -> Option<Vec<f32>> {
+        let channel = self.channels.iter().find(|c| c.node == node && c.property == Property::Weights)?;
+        Some(channel.sample_weights(t))
+    }
+
     /// Overwrites the animated properties of `locals` with their values at `t`.
     pub fn apply(&self, t: f32, locals: &mut [NodeTransform]) {
-        for channel in &self.channels {
+        for channel in self.channels.iter().filter(|c| c.property != Property::Weights) {
             let Some(local) = locals.get_mut(channel.node) else { continue };
             let NodeTransform::Trs { translation, rotation, scale } = local else { continue };
             let v = channel.sample(t);
@@ -192,6 +254,7 @@ impl Animation {
                 Property::Translation => *translation = v.truncate(),
                 Property::Rotation => *rotation = Quat::from_vec4(v).normalize(),
                 Property::Scale => *scale = v.truncate(),
+                Property::Weights => {}
             }
         }
     }

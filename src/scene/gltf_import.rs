@@ -93,18 +93,6 @@ pub fn load_gltf_bytes(bytes: &[u8], base_dir: &Path, options: &LoadOptions) -> 
             .with_context(|| format!("animation {}", animation.index()))?;
         scene.animations.push(a);
     }
-    let unsupported_channels: Vec<String> = document
-        .animations()
-        .flat_map(|a| a.channels())
-        .filter(|c| c.target().property() == gltf::animation::Property::MorphTargetWeights)
-        .map(|c| {
-            format!(
-                "animation channel on node {} animates morph weights, which strata does not support",
-                c.target().node().index()
-            )
-        })
-        .collect();
-    scene.warnings.extend(unsupported_channels);
     Ok(scene)
 }
 
@@ -546,9 +534,9 @@ fn import_animation(animation: &gltf::Animation<'_>, buffers: &[Vec<u8>], scene:
             gltf::animation::Property::Translation => Property::Translation,
             gltf::animation::Property::Rotation => Property::Rotation,
             gltf::animation::Property::Scale => Property::Scale,
-            gltf::animation::Property::MorphTargetWeights => continue,
+            gltf::animation::Property::MorphTargetWeights => Property::Weights,
         };
-        if matches!(scene.nodes[node].transform, NodeTransform::Matrix(_)) {
+        if property != Property::Weights && matches!(scene.nodes[node].transform, NodeTransform::Matrix(_)) {
             bail!("channel targets node {node}, which has a matrix; only TRS nodes can be animated (§3.11)");
         }
         let sampler = channel.sampler();
@@ -558,6 +546,7 @@ fn import_animation(animation: &gltf::Animation<'_>, buffers: &[Vec<u8>], scene:
             let rotation_types = [(F32, false), (I8, true), (U8, true), (I16, true), (U16, true)];
             match property {
                 Property::Rotation => check_format("sampler output", &sampler.output(), &[Vec4], &rotation_types)?,
+                Property::Weights => check_format("sampler output", &sampler.output(), &[Scalar], &rotation_types)?,
                 _ => check_format("sampler output", &sampler.output(), &[Vec3], &[(F32, false)])?,
             }
         }
@@ -566,21 +555,31 @@ fn import_animation(animation: &gltf::Animation<'_>, buffers: &[Vec<u8>], scene:
         let reader = channel.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let times: Vec<f32> = reader.read_inputs().ok_or_else(|| anyhow!("sampler input cannot be read"))?.collect();
         use gltf::animation::util::ReadOutputs;
-        let values: Vec<Vec4> = match reader.read_outputs().ok_or_else(|| anyhow!("sampler output cannot be read"))? {
-            ReadOutputs::Translations(t) => t.map(vec4_from_xyz).collect(),
-            ReadOutputs::Scales(s) => s.map(vec4_from_xyz).collect(),
-            ReadOutputs::Rotations(r) => r.into_f32().map(Vec4::from_array).collect(),
-            ReadOutputs::MorphTargetWeights(_) => continue,
-        };
         let interpolation = match sampler.interpolation() {
             gltf::animation::Interpolation::Step => Interpolation::Step,
             gltf::animation::Interpolation::Linear => Interpolation::Linear,
             gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
         };
-        channels.push(
-            Channel::new(node, property, interpolation, times, values)
-                .with_context(|| format!("channel {} ({property:?} of node {node})", channel.index()))?,
-        );
+        let per_key = if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+        let channel_name = || format!("channel {} ({property:?} of node {node})", channel.index());
+        let made = match reader.read_outputs().ok_or_else(|| anyhow!("sampler output cannot be read"))? {
+            ReadOutputs::Translations(t) => {
+                Channel::new(node, property, interpolation, times, t.map(vec4_from_xyz).collect())
+            }
+            ReadOutputs::Scales(s) => {
+                Channel::new(node, property, interpolation, times, s.map(vec4_from_xyz).collect())
+            }
+            ReadOutputs::Rotations(r) => {
+                Channel::new(node, property, interpolation, times, r.into_f32().map(Vec4::from_array).collect())
+            }
+            ReadOutputs::MorphTargetWeights(w) => {
+                let weights: Vec<f32> = w.into_f32().collect();
+                // §3.11: one weight per morph target per key (three per key for CUBICSPLINE).
+                let targets = weights.len() / (times.len() * per_key).max(1);
+                Channel::weights(node, interpolation, times, &weights, targets)
+            }
+        };
+        channels.push(made.with_context(channel_name)?);
     }
     Ok(Animation {
         name: animation.name().map(str::to_owned).unwrap_or_else(|| format!("animation {}", animation.index())),

@@ -2,8 +2,8 @@
 //! at the mesh's or a node's weights, flat normals where the file has none, and the surface derivatives bump
 //! mapping needs.
 use super::gltf_accessors::{attribute_formats, check_accessor, check_format, collect_exact, read_floats};
+use super::morph::{apply_weights, finish, MorphSource, MorphTarget};
 use super::skin::JointInfluences;
-use super::surface::compute_surface_derivatives;
 use super::{Mesh, Primitive, Scene};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3, Vec4};
@@ -158,11 +158,13 @@ fn import_primitive(
         bail!("texture coordinates hold non-finite values");
     }
     p.skin_influences = joint_influences(primitive, buffers, p.positions.len())?;
-    apply_morph_targets(primitive, buffers, weights, quantized, &mut p)?;
-    if p.normals.is_empty() {
-        flatten_with_face_normals(&mut p);
-    }
-    compute_surface_derivatives(&mut p);
+    let targets = morph_targets(primitive, buffers, quantized, p.positions.len())?;
+    let flat = p.normals.is_empty();
+    // Kept unmorphed for clips that animate the weights (Scene::deform_instance).
+    let unmorphed = (!targets.is_empty()).then(|| p.clone());
+    apply_weights(&mut p, &targets, weights)?;
+    finish(&mut p, flat);
+    p.morph = unmorphed.map(|unmorphed| Box::new(MorphSource { unmorphed, targets, flat }));
     Ok(p)
 }
 
@@ -200,25 +202,16 @@ fn joint_influences(
     Ok(sets)
 }
 
-/// Adds each morph target's displacements of POSITION, NORMAL and TANGENT, times its weight, to the base
-/// attributes (glTF 2.0 §3.7.2.2); normals are renormalized. Weights past the list count as 0.
-fn apply_morph_targets(
+/// Each morph target's displacements of POSITION, NORMAL and TANGENT (glTF 2.0 §3.7.2.2), every accessor checked
+/// before any is read (the reader slices buffers unchecked).
+fn morph_targets(
     primitive: &gltf::Primitive<'_>,
     buffers: &[Vec<u8>],
-    weights: &[f32],
     quantized: bool,
-    p: &mut Primitive,
-) -> Result<()> {
+    vertices: usize,
+) -> Result<Vec<MorphTarget>> {
     use super::gltf_accessors::{QUANTIZED_DIRECTION, QUANTIZED_DISPLACEMENT};
     use gltf::accessor::{DataType, Dimensions};
-    let weight = |t: usize| weights.get(t).copied().unwrap_or(0.0);
-    if let Some(t) = (0..weights.len()).find(|&t| !weight(t).is_finite()) {
-        bail!("morph target {t}: weight {} is not finite", weight(t));
-    }
-    if (0..primitive.morph_targets().len()).all(|t| weight(t) == 0.0) {
-        return Ok(());
-    }
-    // Every target's accessors are checked before the reader touches any: it slices buffers unchecked.
     for (t, target) in primitive.morph_targets().enumerate() {
         for (name, accessor) in
             [("POSITION", target.positions()), ("NORMAL", target.normals()), ("TANGENT", target.tangents())]
@@ -232,70 +225,27 @@ fn apply_morph_targets(
             };
             check_format(&what, &accessor, &[Dimensions::Vec3], types)?;
             check_accessor(&accessor, buffers).with_context(|| what.clone())?;
-            if accessor.count() != p.positions.len() {
-                bail!("{what} has {} entries for {} vertices", accessor.count(), p.positions.len());
+            if accessor.count() != vertices {
+                bail!("{what} has {} entries for {vertices} vertices", accessor.count());
             }
         }
     }
-    for (t, target) in primitive.morph_targets().enumerate() {
-        let w = weight(t);
-        if w == 0.0 {
-            continue;
-        }
-        let deltas = |name: &str, accessor: Option<gltf::Accessor<'_>>| -> Result<Vec<Vec3>> {
-            let Some(accessor) = accessor else { return Ok(Vec::new()) };
-            let values = read_floats::<3>(&format!("morph target {t} {name}"), &accessor, buffers)?;
-            Ok(values.into_iter().map(|d| w * Vec3::from_array(d)).collect())
-        };
-        for (v, d) in p.positions.iter_mut().zip(deltas("POSITION", target.positions())?) {
-            *v += d;
-        }
-        for (n, d) in p.normals.iter_mut().zip(deltas("NORMAL", target.normals())?) {
-            *n += d;
-        }
-        for (tangent, d) in p.tangents.iter_mut().zip(deltas("TANGENT", target.tangents())?) {
-            *tangent += d.extend(0.0);
-        }
-    }
-    if p.positions.iter().chain(&p.normals).any(|v| !v.is_finite()) || p.tangents.iter().any(|t| !t.is_finite()) {
-        bail!("morph targets move vertex attributes to non-finite values");
-    }
-    for n in &mut p.normals {
-        *n = n.normalize_or_zero();
-    }
-    Ok(())
-}
-
-/// Without NORMAL, glTF asks for flat normals (§3.7.2.1): give every triangle its own three vertices.
-fn flatten_with_face_normals(p: &mut Primitive) {
-    fn gather<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
-        if values.is_empty() {
-            Vec::new()
-        } else {
-            indices.iter().map(|&i| values[i as usize]).collect()
-        }
-    }
-    let normals = p
-        .indices
-        .chunks_exact(3)
-        .flat_map(|tri| {
-            let [a, b, c] = [0, 1, 2].map(|k| p.positions[tri[k] as usize]);
-            // Zero-area triangles get a zero normal rather than NaN.
-            let n = (b - a).cross(c - a).normalize_or_zero();
-            [n, n, n]
+    primitive
+        .morph_targets()
+        .enumerate()
+        .map(|(t, target)| {
+            let deltas = |name: &str, accessor: Option<gltf::Accessor<'_>>| -> Result<Vec<Vec3>> {
+                let Some(accessor) = accessor else { return Ok(Vec::new()) };
+                let values = read_floats::<3>(&format!("morph target {t} {name}"), &accessor, buffers)?;
+                Ok(values.into_iter().map(Vec3::from_array).collect())
+            };
+            Ok(MorphTarget {
+                positions: deltas("POSITION", target.positions())?,
+                normals: deltas("NORMAL", target.normals())?,
+                tangents: deltas("TANGENT", target.tangents())?,
+            })
         })
-        .collect();
-    p.positions = gather(&p.positions, &p.indices);
-    p.tangents = gather(&p.tangents, &p.indices);
-    p.uvs = gather(&p.uvs, &p.indices);
-    p.uvs1 = gather(&p.uvs1, &p.indices);
-    p.colors = gather(&p.colors, &p.indices);
-    for set in &mut p.skin_influences {
-        set.joints = gather(&set.joints, &p.indices);
-        set.weights = gather(&set.weights, &p.indices);
-    }
-    p.normals = normals;
-    p.indices = (0..p.positions.len() as u32).collect();
+        .collect()
 }
 
 /// A primitive's `KHR_materials_variants` mappings: (variant, material) for each variant a mapping lists.

@@ -18,6 +18,7 @@ pub mod image_decode;
 pub mod library;
 pub mod light;
 pub mod material;
+pub mod morph;
 pub mod motion;
 pub mod scene_file;
 pub mod settings;
@@ -61,6 +62,8 @@ pub struct Primitive {
     pub variant_materials: Vec<(usize, usize)>,
     /// `JOINTS_n`/`WEIGHTS_n`, one entry per set (each as long as `positions`); empty for a mesh without skin data.
     pub skin_influences: Vec<skin::JointInfluences>,
+    /// The unmorphed attributes and morph targets, for clips that animate the weights; None without targets.
+    pub morph: Option<Box<morph::MorphSource>>,
 }
 
 impl Primitive {
@@ -174,7 +177,7 @@ impl Scene {
         let rest = self.skins.is_empty().then(Vec::new).unwrap_or_else(|| self.node_world_transforms(None));
         for (i, instance) in self.instances.iter().enumerate() {
             // A skinned instance at its rest pose: its vertices as the skin places them.
-            if let Some(deformed) = self.deform_instance(i, &rest) {
+            if let Some(deformed) = self.deform_instance(i, &rest, None) {
                 for &w in deformed.iter().flat_map(|d| &d.positions) {
                     lo = lo.min(w);
                     hi = hi.max(w);

@@ -1,9 +1,9 @@
-//! Skins (glTF 2.0 §3.7.3): joints, their inverse bind matrices, and each vertex's joints and weights. A skinned
+//! Deformation: morph weights a clip animates (§3.7.2.2, `morph`) and skins (glTF 2.0 §3.7.3): joints, their inverse bind matrices, and each vertex's joints and weights. A skinned
 //! vertex is Σ wᵢ·Jᵢ·p with joint matrix Jᵢ = (joint i's world transform) · (its inverse bind matrix), which puts it
 //! in the world directly: the transform of the node that holds the mesh is not applied (§3.7.3.3), so a skinned
 //! instance's transform is the identity (`Scene::instance_transforms_from`). Deformed on the host, once per sample
 //! at its shutter time (docs/architecture.md, "Deformed meshes").
-use super::{Primitive, Scene};
+use super::{Primitive, Property, Scene};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -91,19 +91,59 @@ impl Scene {
         self.skins.get(self.nodes.get(node)?.skin?)
     }
 
-    /// Instances whose vertices move with time (skinned ones), in scene order: each gets vertex streams of its own
-    /// per sample.
-    pub fn deformed_instances(&self) -> Vec<usize> {
-        (0..self.instances.len()).filter(|&i| self.instance_skin(i).is_some()).collect()
+    /// Whether instance `instance`'s morph weights are animated: its node has a weights channel in the clip and
+    /// its mesh has morph targets.
+    fn has_animated_weights(&self, instance: usize) -> bool {
+        let Some(i) = self.instances.get(instance) else { return false };
+        let animated = i.node.is_some_and(|node| {
+            self.animations.iter().flat_map(|a| &a.channels).any(|c| c.node == node && c.property == Property::Weights)
+        });
+        animated && self.meshes[i.mesh].primitives.iter().any(|p| p.morph.is_some())
     }
 
-    /// Instance `instance`'s primitives deformed for the node world transforms `node_world` (one per node, at a
-    /// sample's time); `None` for an instance that does not deform.
-    pub fn deform_instance(&self, instance: usize, node_world: &[Mat4]) -> Option<Vec<DeformedVertices>> {
-        let skin = self.instance_skin(instance)?;
-        let joints = skin.joint_matrices(node_world);
+    /// Instances whose vertices move with time (skinned, or with animated morph weights), in scene order: each
+    /// gets vertex streams of its own per sample.
+    pub fn deformed_instances(&self) -> Vec<usize> {
+        (0..self.instances.len()).filter(|&i| self.instance_skin(i).is_some() || self.has_animated_weights(i)).collect()
+    }
+
+    /// Instance `instance`'s primitives deformed at time `t` (None: the rest pose), given every node's world
+    /// transform then (`node_world`): morphed at the clip's weights, then skinned (glTF 2.0 §3.7.2.2 before
+    /// §3.7.3). Skinned vertices are in the world, the others in the instance's object space. `None` for an
+    /// instance that does not deform.
+    pub fn deform_instance(
+        &self,
+        instance: usize,
+        node_world: &[Mat4],
+        t: Option<f32>,
+    ) -> Option<Vec<DeformedVertices>> {
+        let skin = self.instance_skin(instance);
+        let animated = self.has_animated_weights(instance);
+        if skin.is_none() && !animated {
+            return None;
+        }
+        let node = self.instances[instance].node;
+        let weights = t.filter(|_| animated).and_then(|t| self.animations.iter().find_map(|a| a.weights_at(node?, t)));
+        let joints = skin.map(|s| s.joint_matrices(node_world));
         let mesh = &self.meshes[self.instances[instance].mesh];
-        Some(mesh.primitives.iter().map(|p| skin_vertices(p, &joints)).collect())
+        let deformed = mesh.primitives.iter().map(|p| {
+            // A sample whose weights do not morph (not finite, or moving a vertex to infinity) keeps the rest pose.
+            let morphed = match (&weights, &p.morph) {
+                (Some(w), Some(source)) => super::morph::morphed(source, w).ok(),
+                _ => None,
+            };
+            let p = morphed.as_ref().unwrap_or(p);
+            match &joints {
+                Some(joints) => skin_vertices(p, joints),
+                None => DeformedVertices {
+                    positions: p.positions.clone(),
+                    normals: p.normals.clone(),
+                    dpdu: p.dpdu.clone(),
+                    dpdv: p.dpdv.clone(),
+                },
+            }
+        });
+        Some(deformed.collect())
     }
 }
 

@@ -46,6 +46,38 @@ pub fn compute_surface_derivatives(primitive: &mut Primitive) {
     primitive.dpdv = sum_v.iter().zip(&count).map(|(s, &c)| if c > 0 { *s / c as f32 } else { Vec3::ZERO }).collect();
 }
 
+/// Without NORMAL, glTF asks for flat normals (§3.7.2.1): give every triangle its own three vertices.
+pub fn flatten_with_face_normals(p: &mut Primitive) {
+    fn gather<T: Copy>(values: &[T], indices: &[u32]) -> Vec<T> {
+        if values.is_empty() {
+            Vec::new()
+        } else {
+            indices.iter().map(|&i| values[i as usize]).collect()
+        }
+    }
+    let normals = p
+        .indices
+        .chunks_exact(3)
+        .flat_map(|tri| {
+            let [a, b, c] = [0, 1, 2].map(|k| p.positions[tri[k] as usize]);
+            // Zero-area triangles get a zero normal rather than NaN.
+            let n = (b - a).cross(c - a).normalize_or_zero();
+            [n, n, n]
+        })
+        .collect();
+    p.positions = gather(&p.positions, &p.indices);
+    p.tangents = gather(&p.tangents, &p.indices);
+    p.uvs = gather(&p.uvs, &p.indices);
+    p.uvs1 = gather(&p.uvs1, &p.indices);
+    p.colors = gather(&p.colors, &p.indices);
+    for set in &mut p.skin_influences {
+        set.joints = gather(&set.joints, &p.indices);
+        set.weights = gather(&set.weights, &p.indices);
+    }
+    p.normals = normals;
+    p.indices = (0..p.positions.len() as u32).collect();
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
