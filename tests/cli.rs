@@ -436,6 +436,36 @@ fn a_fatal_signal_is_named_on_stderr_and_still_ends_the_process() {
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
 }
 
+/// The deform benchmark runs end to end under the validation layer (every deformed BLAS rebuild and vertex stream
+/// with it) and prints, for both of its scenes, the host's deformation time, the acceleration-structure times
+/// deformed and frozen, and both wall times, each a finite positive number.
+#[test]
+fn the_deform_benchmark_runs_clean_and_prints_every_figure() {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = Command::new(env!("CARGO_BIN_EXE_strata"))
+        .current_dir(repo)
+        .args(["bench", "--only", "deform", "--size", "32x32", "--spp", "4", "--validate"])
+        .output()
+        .expect("run strata bench");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "strata bench failed: {}\n{text}", outcome(&out));
+    let numbers = |line: &str| -> Vec<f64> {
+        line.split(|c: char| !(c.is_ascii_digit() || c == '.')).filter_map(|t| t.parse::<f64>().ok()).collect()
+    };
+    for scene in ["skinned tube", "MorphStressTest.gltf"] {
+        let start = text.find(scene).unwrap_or_else(|| panic!("no {scene} section in:\n{text}"));
+        let section: Vec<&str> = text[start..].lines().take(4).collect();
+        for (line, label, count) in
+            [(1, "host deformation", 1), (2, "acceleration structures", 2), (3, "frame wall time", 3)]
+        {
+            let l = section.get(line).unwrap_or_else(|| panic!("{scene}: no line {line} in:\n{text}"));
+            assert!(l.contains(label), "{scene}: {l:?} is not the {label} line");
+            let found = numbers(l);
+            assert!(found.len() >= count && found.iter().take(count).all(|v| v.is_finite() && *v > 0.0), "{l}");
+        }
+    }
+}
+
 /// The frame benchmark runs end to end under the validation layer on a tiny image and prints every figure it
 /// promises, each a finite positive number: per-pass times, both probe ratios, memory and the scaling fits.
 #[test]

@@ -18,9 +18,18 @@ pub struct BenchArgs {
     /// The second scene of the frame benchmark.
     #[arg(long, value_name = "FILE", default_value = "scenes/showcase.toml")]
     pub showcase: PathBuf,
+    /// The morphing asset of the deform benchmark (its first clip animates morph weights).
+    #[arg(long, value_name = "FILE", default_value = "tests/data/gltf-samples/MorphStressTest.gltf")]
+    pub morph: PathBuf,
     /// Which benchmark: gbuffer (pass times and bump cost), frame (whole distributed-ray-traced frames, the
-    /// ray-query ceiling, scaling and memory), scale-out (checkpoint and merge costs), or all.
-    #[arg(long, value_name = "WHICH", default_value = "all", value_parser = ["all", "gbuffer", "frame", "scale-out"])]
+    /// ray-query ceiling, scaling and memory), scale-out (checkpoint and merge costs), deform (the per-sample cost
+    /// of skins and animated morph weights), or all.
+    #[arg(
+        long,
+        value_name = "WHICH",
+        default_value = "all",
+        value_parser = ["all", "gbuffer", "frame", "scale-out", "deform"]
+    )]
     pub only: String,
     /// Samples per pixel of the frame benchmark.
     #[arg(long, value_name = "N", default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]

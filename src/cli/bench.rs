@@ -35,6 +35,77 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         }
         run(bench_scale_out)?;
     }
+    if args.only == "all" || args.only == "deform" {
+        if args.only == "all" {
+            println!();
+        }
+        run(bench_deform)?;
+    }
+    Ok(())
+}
+
+/// What deformed meshes cost per sample (docs/architecture.md, "Deformed meshes"): a skinned tube of 4,096
+/// triangles bending and MorphStressTest's animated weights (2,412 triangles), each against its own geometry frozen
+/// at the shutter's opening (the same triangles, nothing deformed), in one run: the host's deformation alone, the
+/// GPU's acceleration-structure time per sample (the deformed BLAS rebuilds and the TLAS), and the whole frame.
+fn bench_deform(args: &BenchArgs, gpu: Gpu) -> Result<()> {
+    use strata::bench::time_frame_with;
+    use strata::scene::fixtures::{frozen_at, skinned_tube};
+    let (w, h) = (args.size.0.min(256), args.size.1.min(256));
+    println!("Deformed meshes at {w}x{h}, {} spp, shutter 0 to 0.5 s, on {}", args.spp, gpu.device.report.name);
+    let mut morphing = strata::load_scene(&args.morph)?;
+    if let Some(clip) = morphing.animations.first() {
+        morphing.shutter = (0.0, 0.5f32.min(clip.duration()));
+    }
+    let mut tube = skinned_tube(64, 32);
+    tube.shutter = (0.0, 0.5);
+    for (name, scene) in
+        [("skinned tube (4,096 triangles)", &mut tube), (&*args.morph.to_string_lossy(), &mut morphing)]
+    {
+        if !scene.has_light() {
+            scene.add_default_light();
+        }
+        scene.camera = Some(scene.camera_or_default());
+        let frozen = frozen_at(scene, scene.shutter.0);
+        // The host's share: deforming every deformed instance once per sample, as the sample loop does.
+        let deformed = scene.deformed_instances();
+        let started = std::time::Instant::now();
+        for k in 0..args.spp {
+            let t = scene.shutter.0 + (scene.shutter.1 - scene.shutter.0) * (k as f32 + 0.5) / args.spp as f32;
+            let node_world = scene.node_world_transforms(Some(t));
+            for &i in &deformed {
+                std::hint::black_box(scene.deform_instance(i, &node_world, Some(t)));
+            }
+        }
+        let host_ms = started.elapsed().as_secs_f64() * 1e3 / f64::from(args.spp);
+        let settings = strata::scene::settings::RenderSettings {
+            width: w,
+            height: h,
+            spp: args.spp,
+            sampler: strata::scene::settings::SamplerKind::Jittered,
+            ..Default::default()
+        };
+        // A warm-up frame first, so that neither timed frame pays for compiling the pipelines.
+        time_frame_with(&gpu, scene, &strata::scene::settings::RenderSettings { spp: 1, ..settings.clone() }, false)?;
+        let moving = time_frame_with(&gpu, scene, &settings, false)?.stats;
+        let still = time_frame_with(&gpu, &frozen, &settings, false)?.stats;
+        let per_sample = |s: &strata::render::frame::FrameStats| {
+            s.pass_times.unwrap_or_default().tlas_ms / f64::from(s.samples.max(1))
+        };
+        println!("{name}: {} triangles deformed", scene.triangle_count());
+        println!("  host deformation {host_ms:.3} ms per sample");
+        println!(
+            "  acceleration structures per sample: {:.3} ms deformed (BLAS rebuilds + TLAS), {:.3} ms frozen (TLAS)",
+            per_sample(&moving),
+            per_sample(&still)
+        );
+        println!(
+            "  frame wall time: {:.2} s deformed, {:.2} s frozen ({:.2}x)",
+            moving.seconds,
+            still.seconds,
+            moving.seconds / still.seconds
+        );
+    }
     Ok(())
 }
 

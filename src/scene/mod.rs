@@ -3,6 +3,7 @@
 pub mod animation;
 pub mod camera;
 pub mod environment;
+pub mod fixtures;
 pub mod framing;
 pub mod gltf_accessors;
 mod gltf_draco;
