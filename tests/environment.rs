@@ -1,5 +1,6 @@
 //! Environment lighting and transparent backgrounds against what they must equal: the furnace (a diffuse sphere
-//! in a uniform environment reflects albedo × radiance), a mirror that shows the environment as it is, one
+//! in a uniform environment reflects albedo × radiance; a white glTF dielectric reflects 1 at every angle, and
+//! bumps make no energy), a mirror that shows the environment as it is, one
 //! bright texel that lights like a directional light of the same irradiance, importance sampling that beats
 //! uniform sampling, a rotation of the environment that equals the opposite rotation of the scene, and alpha
 //! that composites back into the opaque render. Every GPU test runs under the validation layer.
@@ -305,4 +306,71 @@ fn environment_files_load_from_hdr_and_exr_and_bad_ones_name_the_file() {
     std::fs::write(dir.join("sky.jpg"), b"x").unwrap();
     let err = Environment::load(&dir.join("sky.jpg")).unwrap_err().to_string();
     assert!(err.contains("unknown environment extension \".jpg\""), "{err}");
+}
+
+/// Mean and standard error of the brightest channel over the fully covered pixels of a sphere's image whose
+/// distance from the centre, in sphere radii (`radius` pixels), lies in [lo, hi); and the largest pixel there.
+fn ring_stats(frame: &RenderedFrame, radius: f32, (lo, hi): (f32, f32)) -> (f64, f64, f64) {
+    let (w, h) = (frame.linear.width, frame.linear.height);
+    let values: Vec<f64> = (0..w * h)
+        .filter_map(|i| {
+            let (x, y) = ((i % w) as f32 + 0.5 - w as f32 / 2.0, (i / w) as f32 + 0.5 - h as f32 / 2.0);
+            let r = (x * x + y * y).sqrt() / radius;
+            let p = frame.linear.pixels[i as usize];
+            (p[3] >= 1.0 && r >= lo && r < hi).then(|| f64::from(p[0].max(p[1]).max(p[2])))
+        })
+        .collect();
+    let n = values.len() as f64;
+    assert!(n > 30.0, "only {n} pixels in ring {lo}–{hi}");
+    let mean = values.iter().sum::<f64>() / n;
+    let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (mean, sd / n.sqrt(), values.iter().copied().fold(0.0, f64::max))
+}
+
+/// The white furnace for the glTF dielectric: a white sphere (base colour 1, F0 0.04) in a uniform environment of
+/// radiance 1 reflects exactly 1 everywhere, grazing silhouette included, since its diffuse base gets what the
+/// specular layer leaves over all directions (albedo scaling); glTF 2.0 Appendix B's per-direction 1 − F(v·h)
+/// made 1.04–1.11 there. With a strong bump (shading normals tilted up to grazing) it may lose energy where rays
+/// leave below the surface, but never make any. Tolerances: four standard errors of each ring's mean, plus 0.003
+/// for the albedo table's interpolation (math::brdf).
+#[test]
+fn a_white_dielectric_in_a_white_furnace_reflects_one_at_every_angle_and_bumps_make_no_energy() {
+    use strata::scene::{BumpMap, Material, NoiseKind};
+    let gpu = GpuTest::new();
+    let size = 64u32;
+    for (roughness, bump) in [(0.2, 0.0), (0.5, 0.0), (0.2, 0.08)] {
+        let mut scene = sphere_scene(|s| {
+            s.materials.push(Material {
+                name: "white dielectric".into(),
+                base_color: glam::Vec4::ONE,
+                metallic: 0.0,
+                roughness,
+                bump: (bump > 0.0).then(|| BumpMap {
+                    kind: NoiseKind::Fbm,
+                    amplitude: bump,
+                    frequency: 16.0,
+                    ..Default::default()
+                }),
+                ..Default::default()
+            });
+            s.materials.len() - 1
+        });
+        // 5 m away, so the grazing silhouette is in the 30° view: tan(asin(1/5)) / tan(15°) half images.
+        let distance = 5.0f32;
+        scene.camera.as_mut().unwrap().world_from_camera = look_at(Vec3::Z * distance, Vec3::ZERO, Vec3::Y);
+        scene.environment = Some(Environment::uniform(Vec3::ONE));
+        let s = RenderSettings { indirect: true, bounces: 16, ..settings(size, size, 64, SamplerKind::MultiJittered) };
+        let frame = render(gpu.device(), &scene, &s);
+        let radius = (1.0 / distance).asin().tan() / 15f32.to_radians().tan() * size as f32 / 2.0;
+        for ring in [(0.0, 0.7), (0.7, 0.9), (0.9, 0.97)] {
+            let (mean, se, max) = ring_stats(&frame, radius, ring);
+            eprintln!("roughness {roughness}, bump {bump}, ring {ring:?}: {mean:.4} ± {se:.4}, max {max:.3}");
+            let tolerance = 4.0 * se + 0.003;
+            assert!(mean <= 1.0 + tolerance, "roughness {roughness}, bump {bump}, ring {ring:?}: {mean} ± {se} > 1");
+            if bump == 0.0 {
+                assert!(mean >= 1.0 - tolerance, "roughness {roughness}, ring {ring:?}: {mean} ± {se} < 1");
+            }
+        }
+    }
+    gpu.finish().unwrap();
 }

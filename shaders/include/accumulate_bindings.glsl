@@ -33,6 +33,10 @@ layout(set = 0, binding = ACCUMULATE_BINDING_MATERIALS, std430) readonly buffer 
 layout(set = 0, binding = ACCUMULATE_BINDING_LIGHTS, std430) readonly buffer Lights { GpuLight lights[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_PRIMITIVES, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_TEXTURES) uniform sampler2D textures[];
+// The GGX lobe's directional albedo terms (E1, E5) per (roughness, view cosine), roughness-major (math::brdf).
+layout(set = 0, binding = ACCUMULATE_BINDING_SPECULAR_ALBEDO, std430) readonly buffer SpecularAlbedo {
+    vec2 specular_albedo[];
+};
 layout(set = 0, binding = ACCUMULATE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_CAMERAS, std430) readonly buffer Cameras { GpuCamera cameras[]; };
 // The environment (environment.glsl; src/render/environment.rs): a header, then texels and the sampling CDFs.

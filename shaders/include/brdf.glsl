@@ -14,6 +14,9 @@ struct Shading {
     float ior;
     float specular;       // KHR_materials_specular factor (times its texture's alpha)
     vec3 specular_color;  // KHR_materials_specular colour
+    // What the specular layer leaves to the diffuse base seen from the viewer: 1 − the layer's directional
+    // albedo there (albedo scaling; set where the view is known, surface.glsl's face_viewer; 1 until then).
+    float diffuse_share;
 };
 
 float luminance(vec3 c) {
@@ -90,12 +93,24 @@ void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 spec
     vec3 h = normalize(l + v);
     float base_share;
     vec3 f = fresnel(m, max(dot(v, h), 0.0), base_share);
-    diffuse = base_share * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
+    // The diffuse base gets what the specular layer does not reflect, over all directions (m.diffuse_share), not
+    // glTF 2.0 Appendix B's 1 − F(v·h) per direction, which at grazing views adds up to more than arrives
+    // (docs/architecture.md, "Energy: the diffuse base under the specular layer").
+    diffuse = m.diffuse_share * (1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo * (nl / PI);
     // Seen from below the shading normal (a bumped or interpolated normal turned away from the viewer) the
     // specular lobe reflects nothing, as sample_specular finds: light sampling and gloss rays agree.
     if (nv <= 0.0) return;
     float a = ggx_alpha(m.roughness);
     specular = f * ggx_d(max(dot(n, h), 0.0), a) * smith_visibility(nl, nv, a) * nl;
+}
+
+// What the dielectric's specular layer leaves to the diffuse base when seen at cosine nv: 1 − its directional
+// albedo F0·E1 + (F90 − F0)·E5 (Schlick's Fresnel split in two terms, each tabulated over view cosine and
+// roughness: `terms` from math::brdf's table), the largest channel's as fresnel's base_share takes.
+float diffuse_share_from(Shading m, vec2 terms) {
+    vec3 f0 = dielectric_f0(m);
+    vec3 albedo = f0 * terms.x + (vec3(m.specular) - f0) * terms.y;
+    return clamp(1.0 - max(albedo.x, max(albedo.y, albedo.z)), 0.0, 1.0);
 }
 
 // The probability of choosing reflection at microfacet normal h (the rest refracts).

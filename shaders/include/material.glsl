@@ -102,6 +102,7 @@ MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2
                                                   m.specular_color_uv_rows, footprint_lod).rgb;
     }
     p.shading.specular_color = m.specular_color.rgb * p.specular_color_texel;
+    p.shading.diffuse_share = 1.0;
     if (m.unlit != 0) {
         // KHR_materials_unlit: the base colour is what the surface shows, as radiance; it reflects and transmits
         // nothing (specular 0 is F0 = F90 = 0, brdf.glsl). It is no light: light sampling never picks it (its

@@ -14,8 +14,14 @@ const uint ACCUMULATE_BINDING_PRIMITIVES = 6u;
 const uint ACCUMULATE_BINDING_COUNTERS = 8u;
 const uint ACCUMULATE_BINDING_CAMERAS = 9u;
 const uint ACCUMULATE_BINDING_ENVIRONMENT = 7u;
+// The specular lobe's directional albedo table (math::brdf, brdf.glsl's diffuse_share).
+const uint ACCUMULATE_BINDING_SPECULAR_ALBEDO = 10u;
 // The texture array is the set's last binding: its size varies per scene (one pipeline serves every size).
-const uint ACCUMULATE_BINDING_TEXTURES = 10u;
+const uint ACCUMULATE_BINDING_TEXTURES = 11u;
+// The specular albedo table's size: view cosines at cell centres (k + 0.5) / MU_STEPS, roughness at
+// j / (ROUGHNESS_STEPS - 1).
+const uint SPECULAR_ALBEDO_MU_STEPS = 64u;
+const uint SPECULAR_ALBEDO_ROUGHNESS_STEPS = 32u;
 // The side of the accumulation compute shader's square workgroup: one tile of its tile queue.
 const uint ACCUMULATE_TILE_SIZE = 8u;
 // The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device

@@ -12,6 +12,22 @@ vec3 background_seen(vec3 dir) {
     return pc.background.rgb;
 }
 
+// The specular lobe's directional albedo terms (E1, E5) at view cosine `nv` and `roughness`: the table
+// (math::brdf) read bilinearly, clamped at its edges, as math::brdf::lookup reads it.
+vec2 specular_albedo_terms(float nv, float roughness) {
+    float x = clamp(clamp(nv, 0.0, 1.0) * float(SPECULAR_ALBEDO_MU_STEPS) - 0.5, 0.0, float(SPECULAR_ALBEDO_MU_STEPS - 1u));
+    float y = clamp(roughness, 0.0, 1.0) * float(SPECULAR_ALBEDO_ROUGHNESS_STEPS - 1u);
+    uint x0 = uint(floor(x));
+    uint y0 = uint(floor(y));
+    uint x1 = min(x0 + 1u, SPECULAR_ALBEDO_MU_STEPS - 1u);
+    uint y1 = min(y0 + 1u, SPECULAR_ALBEDO_ROUGHNESS_STEPS - 1u);
+    float fx = x - float(x0);
+    float fy = y - float(y0);
+    vec2 top = mix(specular_albedo[y0 * SPECULAR_ALBEDO_MU_STEPS + x0], specular_albedo[y0 * SPECULAR_ALBEDO_MU_STEPS + x1], fx);
+    vec2 bottom = mix(specular_albedo[y1 * SPECULAR_ALBEDO_MU_STEPS + x0], specular_albedo[y1 * SPECULAR_ALBEDO_MU_STEPS + x1], fx);
+    return mix(top, bottom, fy);
+}
+
 // Turns the normals to the side the ray arrives from; arriving from behind means travelling inside. Then the
 // one rule of emission, for every way a surface is seen (the G-buffer's visible surface, primary rays, gloss,
 // translucency and diffuse rays): a surface emits towards a side only where light sampling could choose it
@@ -24,6 +40,7 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
         s.normal = -s.normal;
         s.geometric = -s.geometric;
     }
+    s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
     bool emits = m.double_sided != 0 || !s.inside;
     if (!emits) s.emission = vec3(0.0);
     float factor = luminance(m.emissive.rgb);

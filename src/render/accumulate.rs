@@ -125,6 +125,8 @@ pub struct AccumulateInputs<'a> {
     pub cameras: &'a Buffer,
     /// The scene's environment (render::environment).
     pub environment: &'a Buffer,
+    /// The specular lobe's directional albedo table (math::brdf::specular_albedo_table).
+    pub specular_albedo: &'a Buffer,
 }
 
 /// How the pass spreads a sample's pixels over the invocations it launches. The picture does not depend on it
@@ -293,7 +295,8 @@ impl AccumulatePass {
             .combined_image_samplers(ACCUMULATE_BINDING_TEXTURES, &inputs.textures.bindings())
             .storage_buffer(ACCUMULATE_BINDING_COUNTERS, inputs.counters)
             .storage_buffer(ACCUMULATE_BINDING_CAMERAS, inputs.cameras)
-            .storage_buffer(ACCUMULATE_BINDING_ENVIRONMENT, inputs.environment);
+            .storage_buffer(ACCUMULATE_BINDING_ENVIRONMENT, inputs.environment)
+            .storage_buffer(ACCUMULATE_BINDING_SPECULAR_ALBEDO, inputs.specular_albedo);
         Ok(set)
     }
 
