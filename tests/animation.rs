@@ -217,8 +217,7 @@ fn one_animation_clip_plays_the_first_unless_another_is_named() {
     let listing = String::from_utf8_lossy(&info.stdout);
     assert!(info.status.success(), "{}", outcome(&info));
     assert!(
-        listing.contains("[0] \"Slide\": 1.000 s, 1 channels strata plays")
-            && listing.contains("[1] \"Lift\": 2.000 s"),
+        listing.contains("[0] \"Slide\": 1.000 s, 1 channel\n") && listing.contains("[1] \"Lift\": 2.000 s"),
         "{listing}"
     );
     let out = dir.join("jog.png");
@@ -431,6 +430,19 @@ fn a_turning_joint_blurs_only_the_part_it_moves() {
     assert!(moving > 5 * edges, "{moving} partly covered pixels where the joint turns, {edges} in the still frame");
     drop((blurred, sharp));
     gpu.finish().unwrap();
+}
+
+#[test]
+fn strata_info_lists_skins_and_morph_weight_channels() {
+    let skin =
+        strata(&["info".as_ref(), common::cli::repo_file("tests/data/gltf-samples/SimpleSkin.gltf").as_os_str()]);
+    let text = String::from_utf8_lossy(&skin.stdout);
+    assert!(skin.status.success() && text.contains("\"skin 0\" (2 joints; skins node 0)"), "{}", outcome(&skin));
+    let morph =
+        strata(&["info".as_ref(), common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf").as_os_str()]);
+    let text = String::from_utf8_lossy(&morph.stdout);
+    assert!(text.contains("\"Individuals\": 9.333 s, 1 channel (1 of them morph weights)"), "{}", outcome(&morph));
+    assert!(!text.contains("warning"), "{}", outcome(&morph));
 }
 
 #[test]

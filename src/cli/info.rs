@@ -85,13 +85,29 @@ fn scene_info(path: &std::path::Path) -> Result<()> {
     let names = |names: Vec<&str>| if names.is_empty() { "none".to_string() } else { names.join(", ") };
     let _ = writeln!(text, "  cameras: {}", names(scene.cameras.iter().map(|c| c.name.as_str()).collect()));
     let _ = writeln!(text, "  lights: {}", names(scene.lights.iter().map(|l| l.name.as_str()).collect()));
+    if !scene.skins.is_empty() {
+        let skins: Vec<String> = scene
+            .skins
+            .iter()
+            .enumerate()
+            .map(|(k, skin)| {
+                let nodes: Vec<&str> =
+                    scene.nodes.iter().filter(|n| n.skin == Some(k)).map(|n| n.name.as_str()).collect();
+                format!("\"{}\" ({} joints; skins {})", skin.name, skin.joints.len(), names(nodes))
+            })
+            .collect();
+        let _ = writeln!(text, "  skins (applied at every sample's time): {}", skins.join(", "));
+    }
     if scene.animations.is_empty() {
         let _ = writeln!(text, "  animation clips: none");
     } else {
         let _ = writeln!(text, "  animation clips (--animation NAME|INDEX; the first plays unless one is named):");
         for (i, clip) in scene.animations.iter().enumerate() {
             let (duration, channels) = (clip.duration(), clip.channels.len());
-            let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channels strata plays", clip.name);
+            let weights = clip.channels.iter().filter(|c| c.property == strata::scene::Property::Weights).count();
+            let morph = if weights > 0 { format!(" ({weights} of them morph weights)") } else { String::new() };
+            let plural = if channels == 1 { "" } else { "s" };
+            let _ = writeln!(text, "    [{i}] \"{}\": {duration:.3} s, {channels} channel{plural}{morph}", clip.name);
         }
     }
     if !scene.variants.is_empty() {
