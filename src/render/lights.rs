@@ -28,11 +28,18 @@ fn luminance(c: Vec3) -> f32 {
 }
 
 impl LightSet {
-    /// The lights at one time, from the node transforms at that time (`Scene::node_world_transforms`) and the
-    /// instance transforms they give (`Scene::instance_transforms_from`). `rest` are the node transforms at
+    /// The lights at time `t` (None: the rest pose), from the node transforms then (`Scene::node_world_transforms`)
+    /// and the instance transforms they give (`Scene::instance_transforms_from`); emissive triangles of deformed
+    /// (skinned or morphing) instances where the deformation puts them at `t`. `rest` are the node transforms at
     /// rest (`node_world_transforms(None)`, once per frame); `scene_radius` turns a directional light's
     /// irradiance into a power for selection.
-    pub fn at(scene: &Scene, moved: &[Mat4], transforms: &[Mat4], rest: &[Mat4], scene_radius: f32) -> Self {
+    pub fn at(
+        scene: &Scene,
+        (t, moved): (Option<f32>, &[Mat4]),
+        transforms: &[Mat4],
+        rest: &[Mat4],
+        scene_radius: f32,
+    ) -> Self {
         let mut lights = Vec::new();
         let mut powers = Vec::new();
         // The environment comes first (the shader finds its selection probability there). Its power for
@@ -124,7 +131,7 @@ impl LightSet {
             powers.push(power);
         }
         let analytic = lights.len();
-        let skipped_triangles = push_emissive_triangles(scene, transforms, &mut lights, &mut powers);
+        let skipped_triangles = push_emissive_triangles(scene, (t, moved), transforms, &mut lights, &mut powers);
         // Selection: proportional to power; lights with no power are never chosen.
         let total: f64 = powers.iter().map(|&p| f64::from(p.max(0.0))).sum();
         let mut running = 0.0f64;
@@ -147,15 +154,26 @@ impl LightSet {
 /// were left out beyond `MAX_EMISSIVE_TRIANGLES`.
 fn push_emissive_triangles(
     scene: &Scene,
+    (t, moved): (Option<f32>, &[Mat4]),
     transforms: &[Mat4],
     lights: &mut Vec<GpuLight>,
     powers: &mut Vec<f32>,
 ) -> usize {
     let analytic = lights.len();
     let mut skipped_triangles = 0;
-    'instances: for (instance, world) in scene.instances.iter().zip(transforms) {
+    let emits = |material: Option<usize>| {
+        let material = material.and_then(|m| scene.materials.get(m));
+        material.is_some_and(|m| luminance(m.emissive) > 0.0 && !m.unlit)
+    };
+    'instances: for (index, (instance, world)) in scene.instances.iter().zip(transforms).enumerate() {
         let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
-        for primitive in &scene.meshes[instance.mesh].primitives {
+        let primitives = &scene.meshes[instance.mesh].primitives;
+        // A deformed instance's emitters are where its deformation puts them (deformed once, and only if it emits).
+        let deformed = match primitives.iter().any(|p| emits(p.material)) {
+            true => scene.deform_instance(index, moved, t),
+            false => None,
+        };
+        for (p_index, primitive) in primitives.iter().enumerate() {
             let Some((material_index, material)) = primitive.material.and_then(|m| Some((m, scene.materials.get(m)?)))
             else {
                 continue;
@@ -163,17 +181,19 @@ fn push_emissive_triangles(
             // Chosen by the factor's power over the whole triangle; the shader scales each sample by the
             // emissive texture at the point it landed on, and drops it where alpha-masking cuts the surface
             // out (rays pass there), which keeps the estimate unbiased.
-            if luminance(material.emissive) <= 0.0 || material.unlit {
+            if !emits(primitive.material) {
                 continue;
             }
+            let moved_vertices = deformed.as_ref().and_then(|d| d.get(p_index));
+            let positions = moved_vertices.map_or(&primitive.positions, |d| &d.positions);
+            let normals = moved_vertices.map_or(&primitive.normals, |d| &d.normals);
             let first_of_primitive = lights.len();
             for tri in primitive.indices.chunks_exact(3) {
                 if lights.len() - analytic >= MAX_EMISSIVE_TRIANGLES {
                     skipped_triangles += primitive.indices.len() / 3;
                     continue 'instances;
                 }
-                let Some(p) = tri.iter().map(|&i| primitive.positions.get(i as usize)).collect::<Option<Vec<_>>>()
-                else {
+                let Some(p) = tri.iter().map(|&i| positions.get(i as usize)).collect::<Option<Vec<_>>>() else {
                     continue;
                 };
                 let [p0, p1, p2] = [0, 1, 2].map(|k| world.transform_point3(*p[k]));
@@ -190,7 +210,7 @@ fn push_emissive_triangles(
                 // glTF's front face winds counter-clockwise; vertex normals, when present, say which side
                 // the surface faces.
                 let normal_sum: Vec3 =
-                    tri.iter().filter_map(|&i| primitive.normals.get(i as usize)).map(|&v| normal_matrix * v).sum();
+                    tri.iter().filter_map(|&i| normals.get(i as usize)).map(|&v| normal_matrix * v).sum();
                 if normal_sum.dot(n) < 0.0 {
                     n = -n;
                 }
@@ -291,7 +311,28 @@ mod tests {
 
     fn lights_at_rest(scene: &Scene) -> LightSet {
         let rest = scene.node_world_transforms(None);
-        LightSet::at(scene, &rest, &scene.instance_transforms_from(&rest), &rest, 1.0)
+        LightSet::at(scene, (None, &rest), &scene.instance_transforms_from(&rest), &rest, 1.0)
+    }
+
+    /// A skinned emitter lights from where its joints put it at the sample's time, not from its bind pose.
+    #[test]
+    fn a_skinned_emitter_lights_from_where_its_skin_puts_it() {
+        let mut tube = crate::scene::fixtures::skinned_tube(2, 4);
+        tube.materials.push(crate::scene::Material { emissive: Vec3::ONE, ..Default::default() });
+        tube.meshes[0].primitives[0].material = Some(0);
+        let rest = tube.node_world_transforms(None);
+        let bent = tube.node_world_transforms(Some(1.0));
+        let set = LightSet::at(&tube, (Some(1.0), &bent), &tube.instance_transforms_from(&bent), &rest, 1.0);
+        let skinned = tube.deform_instance(0, &bent, Some(1.0)).unwrap();
+        let on = |p: Vec3, points: &[Vec3]| points.iter().any(|q| (*q - p).length() < 1e-5);
+        assert!(!set.lights.is_empty());
+        for light in &set.lights {
+            let corner = light.position_kind.truncate();
+            assert!(on(corner, &skinned[0].positions), "light corner {corner} is not a skinned vertex");
+        }
+        // The tip ring turned 90°: some corners are nowhere near the tube as built.
+        let built = &tube.meshes[0].primitives[0].positions;
+        assert!(set.lights.iter().any(|l| !on(l.position_kind.truncate(), built)));
     }
 
     /// KHR_materials_unlit: an unlit emissive material is no light (its emissive factor means nothing).

@@ -221,5 +221,5 @@ impl<'a> SampleSlots<'a> {
 fn lights_at(scene: &Scene, rest: &[Mat4], radius: f32, t: f32) -> (LightSet, Vec<Mat4>, Vec<Mat4>) {
     let moved = scene.node_world_transforms(Some(t));
     let transforms = scene.instance_transforms_from(&moved);
-    (LightSet::at(scene, &moved, &transforms, rest, radius), moved, transforms)
+    (LightSet::at(scene, (Some(t), &moved), &transforms, rest, radius), moved, transforms)
 }
