@@ -78,7 +78,7 @@ fn material_offsets() -> Vec<(&'static str, usize)> {
         alpha_cutoff, alpha_mode, double_sided, base_color_texture, transmission_texture, normal_texture,
         emissive_texture, base_color_uv_rows, bump, metallic_roughness_texture, specular_texture,
         specular_color_texture, metallic_roughness_uv_rows, normal_uv_rows, emissive_uv_rows, transmission_uv_rows,
-        specular_color, specular_uv_rows, specular_color_uv_rows, unlit);
+        specular_color, specular_uv_rows, specular_color_uv_rows, unlit, absorption);
     v
 }
 
@@ -179,13 +179,13 @@ fn a_change_on_the_glsl_side_alone_is_caught() {
             w[3] += 4;
         }
         if op == OP_DECORATE && w[0] == camera_var && w[1] == DECORATION_BINDING {
-            w[2] = 11;
+            w[2] = 12;
         }
         i += count;
     }
     let problems = check_module(&parse(&words)).join("\n");
     assert!(problems.contains("AccumulatePush.seed: GLSL offset 72, Rust 68"), "{problems}");
-    assert!(problems.contains("binding 11 (Cameras): in GLSL, not in Rust"), "{problems}");
+    assert!(problems.contains("binding 12 (Cameras): in GLSL, not in Rust"), "{problems}");
     // The layout the pass would take from that SPIR-V no longer fits the Rust side's write of the cameras.
     let layout = strata::vk::spirv::descriptor_bindings(&[("patched", bytemuck::cast_slice(&words))], 1).unwrap();
     let cameras = strata::shaders::constants::ACCUMULATE_BINDING_CAMERAS;

@@ -29,7 +29,7 @@ fn document(buffer_entry: Value) -> Value {
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_texture_transform", "KHR_lights_punctual", "KHR_materials_emissive_strength",
                            "KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_specular",
-                           "EXT_made_up_extension"],
+                           "KHR_materials_volume", "EXT_made_up_extension"],
         "scenes": [{"nodes": [0, 1]}],
         "nodes": [{"mesh": 0}, {"translation": [0, 3, 0],
                    "extensions": {"KHR_lights_punctual": {"light": 0}}}],
@@ -46,6 +46,8 @@ fn document(buffer_entry: Value) -> Value {
                 "KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0,
                     "extensions": {"KHR_texture_transform": {"scale": [3, 1]}}}},
                 "KHR_materials_ior": {"ior": 1.33},
+                "KHR_materials_volume": {"thicknessFactor": 0.1, "attenuationDistance": 2.0,
+                    "attenuationColor": [0.5, 1.0, 0.25]},
                 "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.8, 0.6],
                     "specularTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.25, 0]}}},
                     "specularColorTexture": {"index": 1, "texCoord": 1,
@@ -131,6 +133,10 @@ fn check(scene: &strata::scene::Scene) {
     assert!(m.double_sided);
     assert_eq!(m.emissive, Vec3::new(6.0, 3.0, 0.0), "emissiveFactor × emissiveStrength");
     assert_eq!((m.transmission, m.ior), (0.8, 1.33));
+    // KHR_materials_volume: σ = −ln(colour) / distance.
+    assert_eq!((m.attenuation_color, m.attenuation_distance), (Vec3::new(0.5, 1.0, 0.25), 2.0));
+    let sigma = m.absorption();
+    assert!((sigma - Vec3::new(2f32.ln() / 2.0, 0.0, 4f32.ln() / 2.0)).abs().max_element() < 1e-6, "{sigma}");
     let t = m.base_color_texture.unwrap().transform.unwrap();
     assert_eq!(t.apply(Vec2::new(0.25, 0.25)), Vec2::new(1.0, 0.5), "scale 2 then offset (0.5, 0)");
     // The normal texture's transform comes from its raw extension object (the gltf crate reads textureInfo's only):

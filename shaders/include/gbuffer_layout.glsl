@@ -46,6 +46,7 @@ struct GpuMaterial {
     vec4 specular_color;     // rgb KHR_materials_specular colour (tints the dielectric F0)
     vec4 specular_uv_rows[2];
     vec4 specular_color_uv_rows[2];
+    vec4 absorption;         // rgb σ per metre inside the material (KHR_materials_volume); 0: none
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.

@@ -149,6 +149,9 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         vec3 v = -r.dir;
         r.cone.x += r.cone.y * t_hit;
         Surface s = hit_surface(h, v, r.cone.x, false);
+        // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over the
+        // segment (KHR_materials_volume), for everything it finds here and beyond.
+        if (s.inside) r.throughput *= exp(-s.absorption * t_hit);
         float density = 0.0;
         float cos_light = abs(dot(s.geometric, r.dir));
         if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {

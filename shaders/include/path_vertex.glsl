@@ -20,6 +20,7 @@ struct Surface {
     vec3 geometric;  // face normal, same side
     vec3 emission;
     bool inside;     // the incoming ray travels inside the material
+    vec3 absorption; // σ per metre inside the material (KHR_materials_volume)
     Shading m;
 };
 

@@ -41,6 +41,7 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
         s.geometric = -s.geometric;
     }
     s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
+    s.absorption = m.absorption.rgb;
     bool emits = m.double_sided != 0 || !s.inside;
     if (!emits) s.emission = vec3(0.0);
     float factor = luminance(m.emissive.rgb);

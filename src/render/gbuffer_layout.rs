@@ -182,6 +182,8 @@ pub struct GpuMaterial {
     pub specular_color: Vec4,
     pub specular_uv_rows: [Vec4; 2],
     pub specular_color_uv_rows: [Vec4; 2],
+    /// rgb: the absorption coefficient σ per metre inside (KHR_materials_volume, `Material::absorption`); w unused.
+    pub absorption: Vec4,
 }
 
 impl GpuMaterial {
@@ -235,6 +237,7 @@ impl GpuMaterial {
             specular_color: m.specular_color.extend(0.0),
             specular_uv_rows: uv_rows(m.specular_texture),
             specular_color_uv_rows: uv_rows(m.specular_color_texture),
+            absorption: m.absorption().extend(0.0),
         }
     }
 }
@@ -281,7 +284,8 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, specular_uv_rows), 304);
         assert_eq!(offset_of!(GpuMaterial, specular_color_texture), 152);
         assert_eq!(offset_of!(GpuMaterial, specular_color_uv_rows), 336);
-        assert_eq!(size_of::<GpuMaterial>(), 368);
+        assert_eq!(offset_of!(GpuMaterial, absorption), 368);
+        assert_eq!(size_of::<GpuMaterial>(), 384);
     }
 
     #[test]

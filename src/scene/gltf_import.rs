@@ -13,7 +13,7 @@ use glam::{Mat4, Quat, Vec3, Vec4};
 use std::path::Path;
 
 /// Extensions strata implements; a file that requires any other is refused.
-pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
+pub const SUPPORTED_EXTENSIONS: [&str; 15] = [
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "EXT_texture_webp",
@@ -25,6 +25,7 @@ pub const SUPPORTED_EXTENSIONS: [&str; 14] = [
     "KHR_materials_transmission",
     "KHR_materials_unlit",
     "KHR_materials_variants",
+    "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_basisu",
     "KHR_texture_transform",

@@ -221,6 +221,11 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
             .map(|s| Vec3::from_array(s.specular_color_factor()))
             .unwrap_or(defaults.specular_color),
         specular_color_texture: m.specular().and_then(|s| s.specular_color_texture()).as_ref().map(texture_ref),
+        attenuation_color: m
+            .volume()
+            .map(|v| Vec3::from_array(v.attenuation_color()))
+            .unwrap_or(defaults.attenuation_color),
+        attenuation_distance: m.volume().map(|v| v.attenuation_distance()).unwrap_or(defaults.attenuation_distance),
         bump: None,
         unlit: m.unlit(),
     })

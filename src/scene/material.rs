@@ -191,6 +191,10 @@ pub struct Material {
     pub specular_color: Vec3,
     /// `KHR_materials_specular` colour texture (sRGB): its RGB scales `specular_color`.
     pub specular_color_texture: Option<TextureRef>,
+    /// `KHR_materials_volume`: the colour white light turns after `attenuation_distance` metres (world units)
+    /// inside the material (Beer–Lambert absorption); infinity: no absorption.
+    pub attenuation_color: Vec3,
+    pub attenuation_distance: f32,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
     /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
@@ -223,6 +227,8 @@ impl Default for Material {
             specular_texture: None,
             specular_color: Vec3::ONE,
             specular_color_texture: None,
+            attenuation_color: Vec3::ONE,
+            attenuation_distance: f32::INFINITY,
             bump: None,
             unlit: false,
         }
@@ -232,6 +238,17 @@ impl Default for Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emissive.max_element() > 0.0
+    }
+
+    /// The absorption coefficient σ per metre inside the material (KHR_materials_volume): light crossing d metres
+    /// keeps exp(−σ·d) = attenuation_color^(d / attenuation_distance) of itself. A colour channel of 0 absorbs
+    /// everything past the surface (σ taken as 1e9 per metre, so that exp stays finite).
+    pub fn absorption(&self) -> Vec3 {
+        if !(self.attenuation_distance > 0.0 && self.attenuation_distance.is_finite()) {
+            return Vec3::ZERO;
+        }
+        let color = self.attenuation_color.clamp(Vec3::ZERO, Vec3::ONE);
+        Vec3::from_array(color.to_array().map(|c| if c > 0.0 { -c.ln() / self.attenuation_distance } else { 1e9 }))
     }
 }
 
