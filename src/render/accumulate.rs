@@ -106,6 +106,9 @@ pub struct AccumulatePass {
     tracer: Tracer,
     /// Nearest, clamped: the G-buffer is read texel by texel.
     gbuffer_sampler: Sampler,
+    /// The specular lobe's directional albedo table (math::brdf::specular_albedo_table): the same for every
+    /// frame, so the pass holds it.
+    specular_albedo: Buffer,
     launch: AccumulateLaunch,
     device: Arc<Device>,
 }
@@ -125,8 +128,6 @@ pub struct AccumulateInputs<'a> {
     pub cameras: &'a Buffer,
     /// The scene's environment (render::environment).
     pub environment: &'a Buffer,
-    /// The specular lobe's directional albedo table (math::brdf::specular_albedo_table).
-    pub specular_albedo: &'a Buffer,
 }
 
 /// How the pass spreads a sample's pixels over the invocations it launches. The picture does not depend on it
@@ -231,7 +232,14 @@ impl AccumulatePass {
                 mipmaps: None,
             },
         )?;
-        Ok(Self { tracer, gbuffer_sampler, launch, device: device.clone() })
+        let specular_albedo = Buffer::with_data(
+            device,
+            "specular albedo table",
+            crate::math::brdf::specular_albedo_table(),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            16,
+        )?;
+        Ok(Self { tracer, gbuffer_sampler, specular_albedo, launch, device: device.clone() })
     }
 
     /// The pass's descriptor bindings, as its stages declare them (`shaders/include/accumulate_bindings.glsl`;
@@ -296,7 +304,7 @@ impl AccumulatePass {
             .storage_buffer(ACCUMULATE_BINDING_COUNTERS, inputs.counters)
             .storage_buffer(ACCUMULATE_BINDING_CAMERAS, inputs.cameras)
             .storage_buffer(ACCUMULATE_BINDING_ENVIRONMENT, inputs.environment)
-            .storage_buffer(ACCUMULATE_BINDING_SPECULAR_ALBEDO, inputs.specular_albedo);
+            .storage_buffer(ACCUMULATE_BINDING_SPECULAR_ALBEDO, &self.specular_albedo);
         Ok(set)
     }
 

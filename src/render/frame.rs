@@ -251,13 +251,6 @@ pub fn render_samples(
         device,
         &accumulate_variant(device, scene, settings, options, ray_scene.alpha_tested, max_depth)?,
     )?;
-    let specular_albedo = Buffer::with_data(
-        device,
-        "specular albedo table",
-        crate::math::brdf::specular_albedo_table(),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-        16,
-    )?;
     let accumulate_set = accumulate.descriptor_set(&AccumulateInputs {
         tlas: &slots.tlas.structure,
         gbuffer: &targets.gbuffer,
@@ -269,7 +262,6 @@ pub fn render_samples(
         counters: &slots.counters,
         cameras: &slots.cameras,
         environment: &on_gpu.environment,
-        specular_albedo: &specular_albedo,
     })?;
     let ray_log = if options.log_rays { Some(ray_log_for(device, settings, max_depth)?) } else { None };
     let resolve = ResolvePass::new(device)?;
