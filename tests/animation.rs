@@ -531,3 +531,19 @@ fn a_morphing_mesh_renders_at_a_key_as_its_static_twin_and_blurs_between_keys() 
     drop((a, b, c));
     gpu.finish().unwrap();
 }
+
+/// A morphing instance is placed by its node like any other: its bounds (what the default camera frames) move with
+/// the node's translation.
+#[test]
+fn a_morphing_instance_is_bounded_where_its_node_puts_it() {
+    let text = std::fs::read_to_string(common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let plain = strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    doc["nodes"][0]["translation"] = json!([10.0, 0.0, 0.0]);
+    let file = temp_dir("morph-moved").join("MorphStressTest-moved.gltf");
+    std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+    let moved = strata::load_scene(&file).unwrap();
+    assert_eq!(moved.deformed_instances(), vec![0]);
+    let ((lo, hi), (plain_lo, plain_hi)) = (moved.bounds().unwrap(), plain.bounds().unwrap());
+    assert!((lo - plain_lo - Vec3::X * 10.0).length() < 1e-4 && (hi - plain_hi - Vec3::X * 10.0).length() < 1e-4);
+}

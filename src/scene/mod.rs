@@ -175,10 +175,10 @@ impl Scene {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        let rest = self.skins.is_empty().then(Vec::new).unwrap_or_else(|| self.node_world_transforms(None));
+        let rest = if self.skins.is_empty() { Vec::new() } else { self.node_world_transforms(None) };
         for (i, instance) in self.instances.iter().enumerate() {
-            // A skinned instance at its rest pose: its vertices as the skin places them.
-            if let Some(deformed) = self.deform_instance(i, &rest, None) {
+            // A skinned instance at its rest pose: its vertices where its joints place them, in the world.
+            if let Some(deformed) = self.instance_skin(i).and_then(|_| self.deform_instance(i, &rest, None)) {
                 for &w in deformed.iter().flat_map(|d| &d.positions) {
                     lo = lo.min(w);
                     hi = hi.max(w);
