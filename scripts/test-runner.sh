@@ -1,0 +1,114 @@
+#!/usr/bin/env bash
+# Cargo's runner for every binary it runs on Linux (.cargo/config.toml). A test binary (target/<profile>/deps/…)
+# gets each of its tests run in a process of its own, STRATA_TEST_JOBS at a time (default: the CPU count);
+# anything else (`cargo run`, examples, benches, libtest options this script does not know) runs as it is.
+#
+# Why: the Khronos validation layer Debian 12 ships keeps state shared between instances without a lock
+# (Vulkan-ValidationLayers #4391), so within one process GPU tests take turns (tests/common/mod.rs), and plain
+# `cargo test` left all but one core idle through every render and every cold pipeline compile (single-threaded
+# in lavapipe). Separate processes share nothing but Mesa's on-disk shader cache, which is made for that.
+# Measured in docs/performance.md ("Speed at equal error", the test suite). STRATA_TEST_JOBS=1 runs the binary
+# as libtest alone would.
+set -uo pipefail
+
+bin=$1
+shift
+# `wait -n -p` needs bash 5.1 (Debian 12 and Ubuntu 22.04 have it).
+[[ $(basename "$(dirname "$bin")") == deps && ${STRATA_TEST_JOBS:-} != 1 ]] || exec "$bin" "$@"
+((BASH_VERSINFO[0] * 100 + BASH_VERSINFO[1] >= 501)) || exec "$bin" "$@"
+
+# The libtest arguments this script understands; with any other, libtest runs the binary itself.
+list_args=()
+child_args=()
+show_output=0
+for ((i = 1; i <= $#; i++)); do
+    arg=${!i}
+    case $arg in
+        --nocapture | --show-output) child_args+=("$arg"); show_output=1 ;;
+        --ignored | --include-ignored) list_args+=("$arg"); child_args+=("$arg") ;;
+        --exact | --skip=*) list_args+=("$arg") ;;
+        --skip) ((i++)); list_args+=("$arg" "${!i:-}") ;;
+        -q | --quiet) ;;
+        -*) exec "$bin" "$@" ;;
+        *) list_args+=("$arg") ;;
+    esac
+done
+
+listing=$("$bin" --list --format terse "${list_args[@]}") || exec "$bin" "$@"
+mapfile -t tests < <(sed -n 's/: test$//p' <<<"$listing")
+((${#tests[@]} > 1)) || exec "$bin" "$@"
+
+jobs=${STRATA_TEST_JOBS:-$(nproc 2>/dev/null || echo 2)}
+[[ $jobs =~ ^[1-9][0-9]*$ ]] || { echo "STRATA_TEST_JOBS must be a positive whole number, not '$jobs'" >&2; exit 2; }
+logs=$(mktemp -d "${TMPDIR:-/tmp}/strata-tests.XXXXXX") || exit 2
+declare -A index_of_pid=()
+started=()
+trap 'kill "${!index_of_pid[@]}" 2>/dev/null; rm -rf "$logs"; exit 130' INT TERM
+trap 'rm -rf "$logs"' EXIT
+
+echo
+echo "running ${#tests[@]} tests, each in its own process, $jobs at a time (scripts/test-runner.sh)"
+start=$SECONDS
+passed=0
+ignored=0
+failed=()
+
+# Reports the test whose process `pid` ended with status `status`.
+finish() {
+    local pid=$1 status=$2
+    local i=${index_of_pid[$pid]}
+    unset "index_of_pid[$pid]"
+    local name=${tests[$i]} log=$logs/$i.log
+    local took
+    took=$(awk -v a="${started[$i]}" -v b="$EPOCHREALTIME" 'BEGIN { printf "%.1f s", b - a }')
+    local summary
+    summary=$(grep -E '^test result: ' "$log" | tail -n 1)
+    if ((status != 0)); then
+        echo "test $name ... FAILED (exit status $status, $took)"
+        failed+=("$i")
+    elif [[ $summary == *" 1 ignored;"* ]]; then
+        echo "test $name ... ignored"
+        ((ignored++))
+    elif [[ $summary == *" 1 passed;"* ]]; then
+        echo "test $name ... ok ($took)"
+        ((passed++))
+    else
+        echo "test $name ... FAILED (its process ran no test: ${summary:-no summary}; $took)"
+        failed+=("$i")
+    fi
+    if ((show_output && status == 0)); then sed 's/^/    /' "$log"; fi
+}
+
+for i in "${!tests[@]}"; do
+    while ((${#index_of_pid[@]} >= jobs)); do
+        wait -n -p done_pid
+        finish "$done_pid" $?
+    done
+    started[i]=$EPOCHREALTIME
+    "$bin" --exact "${tests[$i]}" "${child_args[@]}" >"$logs/$i.log" 2>&1 &
+    index_of_pid[$!]=$i
+done
+while ((${#index_of_pid[@]} > 0)); do
+    wait -n -p done_pid
+    finish "$done_pid" $?
+done
+
+if ((${#failed[@]} > 0)); then
+    echo
+    echo "failures:"
+    for i in "${failed[@]}"; do
+        echo
+        echo "---- ${tests[$i]} (its own process: $bin --exact '${tests[$i]}') ----"
+        cat "$logs/$i.log"
+    done
+    echo
+    echo "failures:"
+    for i in "${failed[@]}"; do echo "    ${tests[$i]}"; done
+fi
+echo
+result=ok
+((${#failed[@]} == 0)) || result=FAILED
+echo "test result: $result. $passed passed; ${#failed[@]} failed; $ignored ignored; 0 measured; 0 filtered out;" \
+    "finished in $((SECONDS - start)) s"
+echo
+((${#failed[@]} == 0)) || exit 101
