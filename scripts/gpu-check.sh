@@ -6,10 +6,10 @@
 #
 #   scripts/gpu-check.sh [--device NAME|INDEX] [--out DIR] [--prebuilt DIR] [--reference PNG] [--quick]
 #
-# --prebuilt DIR  use the binaries in DIR (strata and the test binaries, as `--pack DIR` leaves them) instead of
+# --prebuilt DIR  use the binaries in DIR (strata and the test binary, as `--pack DIR` leaves them) instead of
 #                 building: for a GPU machine without a Rust toolchain. `scripts/gpu-check.sh --pack DIR` builds
-#                 them here (release strata, the distributed and render_frames test binaries) and writes the
-#                 repository path the tests were built in, which they read their scenes from.
+#                 them here (release strata and the test binary, whose distributed and render_frames tests run
+#                 there) and writes the repository path the tests were built in, which they read their scenes from.
 # --reference PNG the showcase as another device rendered it at the same settings (lavapipe's, say), to compare
 #                 means and regions with (python3 with numpy and pillow; the report says when it could not).
 # --quick         a 480x270 showcase and a small benchmark: for proving the script on lavapipe in minutes.
@@ -45,13 +45,12 @@ pack_binaries() {
     cargo build --release --locked || exit 1
     cp target/release/strata "$dir/" || exit 1
     local listing
-    listing=$(cargo test --locked --no-run --test distributed --test render_frames 2>&1) || { echo "$listing"; exit 1; }
-    for t in distributed render_frames; do
-        local bin
-        bin=$(echo "$listing" | sed -n "s/.*Executable tests\/$t\.rs (\(.*\))/\1/p" | tail -1)
-        [ -n "$bin" ] || { echo "gpu-check: cargo printed no path for the $t test binary" >&2; exit 1; }
-        cp "$bin" "$dir/$t" || exit 1
-    done
+    listing=$(cargo test --locked --no-run --test suite 2>&1) || { echo "$listing"; exit 1; }
+    local bin
+    bin=$(echo "$listing" | sed -n "s/.*Executable tests\/suite\.rs (\(.*\))/\1/p" | tail -1)
+    [ -n "$bin" ] || { echo "gpu-check: cargo printed no path for the test binary" >&2; exit 1; }
+    # Without its line tables the binary fits the device machine's transfer limit beside strata.
+    strip --strip-debug -o "$dir/suite" "$bin" || exit 1
     echo "$repo" > "$dir/built-in"
     echo "gpu-check: packed strata and the test binaries into $dir ($(du -sh "$dir" | cut -f1))"
 }
@@ -118,7 +117,7 @@ note '```'
 export STRATA_TEST_DEVICE="$device"
 for t in distributed render_frames; do
     step "tests/$t.rs (validation layer; every frame on each way to trace the device has)" "$out/test-$t.txt" \
-        "$bin/$t" --test-threads 1
+        "$bin/suite" "$t::" --test-threads 1
     grep -E '^test result' "$out/test-$t.txt" | sed 's/^/  /' | tee -a "$report"
 done
 

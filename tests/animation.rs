@@ -3,7 +3,7 @@
 //! glTF 2.0 Appendix C. Skins (§3.7.3) on the glTF tutorial's SimpleSkin: vertices and rendered pixels at keyframe
 //! times against the tutorial's skinning worked by hand, identity joints against the unskinned mesh, and motion
 //! blur confined to what the turning joint moves.
-mod common;
+use crate::common;
 use base64::Engine as _;
 use common::cli::{outcome, strata, temp_dir};
 use common::scenes::{render, settings};

@@ -2,7 +2,7 @@
 //! hidden test cases (`--test-cases`: pass, fail, crash, hang, flaky, a validation error) stand in for a broken
 //! driver; the canaries show the comparisons can fail; goldens are blessed into temporary directories, never into
 //! the repository's.
-mod common;
+use crate::common;
 use common::cli::{stderr, strata, temp_dir};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

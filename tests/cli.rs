@@ -1,6 +1,6 @@
 //! The `strata` command as a user runs it: `info`, a real render of the shared Box sample checked against
 //! geometry and a CPU twin of the preview shading, and bad input that must fail cleanly without writing.
-mod common;
+use crate::common;
 use common::cli::{outcome, stderr, strata, temp_dir};
 use glam::Vec4Swizzles;
 use std::path::{Path, PathBuf};

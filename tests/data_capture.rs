@@ -1,7 +1,7 @@
 //! What dataset tools read beside each frame (issue 33): instance labels, forward motion and the camera. A row of
 //! three quads under an orthographic camera looking straight down, so that every expected value follows from
 //! the layout: image x is world +x, image y world +z, 32 pixels to the metre.
-mod common;
+use crate::common;
 use common::cli::{outcome, strata, temp_dir};
 use common::GpuTest;
 use glam::{Mat4, Quat, Vec2, Vec3};

@@ -3,7 +3,7 @@
 //! image of a linear frame is the resolve pass's; and without the library `--denoise` is a clear error that says
 //! how to install it. The library is not linked: where it is not installed the quality test says so and checks
 //! only the error path, unless STRATA_REQUIRE_DENOISER is set (`.ci/run` installs it and sets it).
-mod common;
+use crate::common;
 use common::cli::{outcome, repo_file, strata, temp_dir};
 use common::GpuTest;
 use strata::denoise::Denoiser;

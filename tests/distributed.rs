@@ -1,7 +1,7 @@
 //! The distributed ray tracing effects against their optics (Cook, Porter and Carpenter 1984): each test builds
 //! a small scene whose answer follows from geometry, renders it through the whole sample loop (G-buffer,
 //! TLAS, accumulation, resolve) under the validation layer, and measures the picture.
-mod common;
+use crate::common;
 
 use common::scenes::*;
 use common::GpuTest;

@@ -4,7 +4,7 @@
 //! bright texel that lights like a directional light of the same irradiance, importance sampling that beats
 //! uniform sampling, a rotation of the environment that equals the opposite rotation of the scene, and alpha
 //! that composites back into the opaque render. Every GPU test runs under the validation layer.
-mod common;
+use crate::common;
 
 use common::scenes::*;
 use common::GpuTest;

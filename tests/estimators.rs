@@ -11,7 +11,7 @@
 //! frame and the random sampler keeps every pixel's samples independent of the other pixels', so a region mean's
 //! variance is the sum of its pixels' variances over P². Region means must agree within `Z_MAX` standard errors
 //! of their difference.
-mod common;
+use crate::common;
 
 use common::scenes::*;
 use common::GpuTest;

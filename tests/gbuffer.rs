@@ -1,7 +1,7 @@
 //! The G-buffer pass read back: Blinn bump normals against the closed form on a plane (UV scales 0.5, 1, 4 and
 //! mirrored UVs) and against the CPU twin on an fBm sphere; central differences against the analytic gradient;
 //! the thin lens on the position channel; and no NaN or Inf from degenerate geometry.
-mod common;
+use crate::common;
 
 use common::raycast::{cast, point_ray};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec3Swizzles};

@@ -1,7 +1,7 @@
 //! glTF features the shared samples do not exercise, on small files written here: a GLB with a binary chunk,
 //! sparse accessors, normalized integer attributes, the KHR extensions strata implements, alpha modes, morph
 //! targets at the mesh's and nodes' weights, the warning for an optional extension it does not read, and the error for a skin without joint data.
-mod common;
+use crate::common;
 use common::cli::temp_dir;
 use glam::{Vec2, Vec3, Vec4};
 use serde_json::{json, Value};

@@ -1,7 +1,7 @@
 //! The library API a program holds (issue 33): one `Renderer` renders a `Scene` again and again, with changes
 //! between renders and no reload, gives the same pixels as `strata render` for the same options, and says which
 //! errors are the caller's.
-mod common;
+use crate::common;
 use common::cli::{outcome, repo_file, strata, temp_dir};
 use common::RendererTest;
 use glam::{Mat4, Vec2, Vec3, Vec4};

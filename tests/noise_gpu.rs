@@ -1,7 +1,7 @@
 //! `shaders/include/noise.glsl` on the GPU equals its CPU twin `strata::math::noise` within 1e-5, for noise,
 //! fBm and turbulence values and gradients, at 100,000 points; and its value-only functions give exactly the
 //! values of the functions with gradients (central-difference bump mapping uses them).
-mod common;
+use crate::common;
 
 use glam::Vec3;
 use strata::math::noise::{fbm_with_gradient, noise_with_gradient, turbulence_with_gradient};

@@ -1,6 +1,6 @@
 //! Frame files: PNG and EXR round trips through the same crates, extension handling, and atomic writes that
 //! leave the destination untouched when anything fails.
-mod common;
+use crate::common;
 use common::cli::temp_dir;
 use strata::output::{
     linear_to_srgb, srgb_to_linear, to_srgb8, write_atomic, write_frame, write_frame_with_layers, Frame,

@@ -6,7 +6,7 @@
 //! diagonal when i+j = 7. Vulkan's polygon rasterization rule (spec §28.7.1, "Basic Polygon Rasterization"): a sample
 //! on an edge shared by two triangles is covered by exactly one of them. Blending is additive, so a pixel's value
 //! counts its coverage: the test asserts zero, one colour or the other, never both and never neither.
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::{Vec2, Vec4};

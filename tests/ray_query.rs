@@ -1,6 +1,6 @@
 //! Ray-query smoke test: a BLAS of two triangles, a TLAS with two instances at known transforms, and a compute
 //! shader that casts known rays; hit/miss, distance, custom index and instance id are checked per ray.
-mod common;
+use crate::common;
 
 use glam::{Mat4, Vec3};
 use strata::render::ray_probe::{ProbeRay, RayProbe};

@@ -2,7 +2,7 @@
 //! the CPU, interpolate UV, vertex colour and normal at the nearest hit, sample the base-colour texture, shade as
 //! `preview.frag` does, and compare with the GPU's frame. Covers every scene in `scenes/` and the shared
 //! textured and vertex-coloured samples (a flipped V or a swapped colour space fails it).
-mod common;
+use crate::common;
 
 use common::raycast::{cast, pixel_ray};
 use glam::{Mat3, Vec2, Vec3, Vec4, Vec4Swizzles};

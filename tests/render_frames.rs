@@ -1,7 +1,7 @@
 //! Whole renders: reproducibility, the pinhole and still-frame limits, finite output for every scene and sample
 //! model, and what the samplers claim (Cook 1984: regular sampling aliases, jittered sampling converges faster
 //! than random).
-mod common;
+use crate::common;
 
 use common::scenes::*;
 use common::GpuTest;

@@ -1,6 +1,6 @@
 //! `shaders/include/sampling.glsl` on the GPU produces the same points as its CPU twin
 //! `strata::math::sampling` for every sampler, over many pixels and sample indices.
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::Vec4;

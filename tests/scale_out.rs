@@ -1,7 +1,7 @@
 //! Scale-out as a user runs it, every render under the validation layer: parts of one frame rendered by separate
 //! processes (`--samples`, `--shard`) and merged by `strata merge` into the bytes one render writes; merges that
 //! cannot be made; checkpoints that survive kill -9 and SIGTERM; shards read from a scheduler's variables.
-mod common;
+use crate::common;
 use common::cli::{command, outcome, strata, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -1,6 +1,6 @@
 //! The harness itself: it must catch a deliberately invalid call and a leaked object, and a clean run that
 //! creates and destroys every kind of object strata uses must end with zero messages.
-mod common;
+use crate::common;
 
 use ash::vk;
 use glam::Vec3;
@@ -194,7 +194,8 @@ fn gpu_tests_in_one_process_take_turns() {
 #[test]
 fn a_crash_names_the_gpu_test_that_held_the_device() {
     use std::os::unix::process::ExitStatusExt as _;
-    const NAME: &str = "a_crash_names_the_gpu_test_that_held_the_device";
+    // The test's path in the one test binary (tests/suite.rs): its module, then its name.
+    const NAME: &str = "validation_harness::a_crash_names_the_gpu_test_that_held_the_device";
     const CHILD: &str = "STRATA_TEST_CRASH_ON_PURPOSE";
     if std::env::var_os(CHILD).is_some() {
         let _gpu = common::GpuTest::raster_only();

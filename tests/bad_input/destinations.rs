@@ -3,8 +3,8 @@
 //! batch never writes one file twice, an impossible destination is refused at once, and a write that fails
 //! half-way leaves nothing. Every path collision is tried as given and as at least one other spelling of the same
 //! file (`./`, `../`, absolute, a symlinked directory, a hard link).
+use super::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use crate::common::cli::{command, repo_file, stderr, strata, temp_dir};
-use crate::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use std::path::{Path, PathBuf};
 
 /// Whether a message says that two paths are one file (as the same text, or as two spellings).

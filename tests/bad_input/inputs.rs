@@ -2,9 +2,9 @@
 //! claim huge images end in a clean error naming the file under a 2 GB memory limit; a part's header values are
 //! held to the render's own bounds; sample sets and expectations parse in linear time; special files are named
 //! as what they are; shards beyond the sample count are empty, not errors; counts cannot wrap.
+use super::destinations::make_fifo;
+use super::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use crate::common::cli::{command, repo_file, stderr, strata, temp_dir};
-use crate::destinations::make_fifo;
-use crate::{finishes_within, listing, part, refused, LONG_RENDER, PROMPTLY};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 use strata::partial::file::write_part;

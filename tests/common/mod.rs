@@ -20,7 +20,8 @@ use strata::vk::{Device, DeviceNeeds, Gpu, GpuOptions};
 /// (1.3.239) keeps state shared between instances that it reads and writes without a lock (its global map from
 /// dispatch key to layer data, Vulkan-ValidationLayers issue #4391), and `cargo test` runs tests on parallel
 /// threads: two GPU tests side by side crashed a test binary with SIGSEGV inside the layer
-/// (`examples/validation_layer_race.rs` reproduces it). Test binaries still run side by side (nextest), as separate processes.
+/// (`examples/validation_layer_race.rs` reproduces it). Tests still run side by side as separate processes
+/// (scripts/test-runner.sh, nextest).
 static ONE_GPU_AT_A_TIME: Mutex<()> = Mutex::new(());
 
 thread_local! {
@@ -61,7 +62,7 @@ fn name_the_test_in_crash_messages() {
     INSTALL.call_once(|| {
         strata::fatal_signals::report_fatal_signals_with(
             "GPU tests take turns, so this test held the only device in the process. Run it alone with \
-             `cargo test --test <file> <test name> -- --exact`, or under gdb for a backtrace.",
+             `cargo test <module>::<test name> -- --exact`, or under gdb for a backtrace.",
         )
     });
     let thread = std::thread::current();

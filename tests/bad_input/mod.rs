@@ -3,8 +3,7 @@
 //! refusal comes before the work), and hostile parts, environments, expectations and numbers (`inputs`: no
 //! abort, panic or hang). Each case of issue 34's list is here with its exact reproducer and at least one other
 //! spelling of the same path or value.
-#[path = "../common/mod.rs"]
-mod common;
+use crate::common;
 
 mod destinations;
 mod inputs;
