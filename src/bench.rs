@@ -169,6 +169,17 @@ pub fn time_frame_with(
     let on_gpu = SceneOnGpu::upload(device, scene)?;
     let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
     let options = FrameOptions { timestamps: true, ..Default::default() };
+    // lavapipe compiles a pipeline's shaders with LLVM at its first dispatch, between the GPU timestamps: seconds
+    // that once made a cold run's first scene read 750 ms per sample against 80 warm. A one-sample frame of a few
+    // pixels first readies every pipeline these settings use (the device keeps them), so the figures time the
+    // rendering alone, whatever Mesa's shader cache holds.
+    let warm_up = crate::scene::settings::RenderSettings {
+        width: width.min(8),
+        height: height.min(8),
+        spp: 1,
+        ..settings.clone()
+    };
+    render_frame(device, scene, &on_gpu, &warm_up, &options, &mut |_, _| true)?;
     let frame = render_frame(device, scene, &on_gpu, &settings, &options, &mut |_, _| true)?;
     let stats = frame.stats;
     let (mut probe_rays, mut probe_ms) = (0, 0.0);

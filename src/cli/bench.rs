@@ -85,8 +85,7 @@ fn bench_deform(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             sampler: strata::scene::settings::SamplerKind::Jittered,
             ..Default::default()
         };
-        // A warm-up frame first, so that neither timed frame pays for compiling the pipelines.
-        time_frame_with(&gpu, scene, &strata::scene::settings::RenderSettings { spp: 1, ..settings.clone() }, false)?;
+        // Neither timed frame pays for compiling the pipelines: `time_frame_with` readies them first.
         let moving = time_frame_with(&gpu, scene, &settings, false)?.stats;
         let still = time_frame_with(&gpu, &frozen, &settings, false)?.stats;
         let per_sample = |s: &strata::render::frame::FrameStats| {
