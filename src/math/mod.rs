@@ -3,6 +3,7 @@
 pub mod brdf;
 pub mod bump;
 pub mod environment;
+pub mod ggx;
 pub mod lens;
 pub mod noise;
 pub mod sampling;
