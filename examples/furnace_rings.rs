@@ -5,14 +5,12 @@
 //! ("Energy at grazing angles").
 //!
 //! `cargo run --release --example furnace_rings [SPP]` (default 256).
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 use strata::render::frame::{render_frame, FrameOptions};
 use strata::render::SceneOnGpu;
-use strata::scene::camera::{look_at, Lens};
 use strata::scene::environment::Environment;
-use strata::scene::library::place;
 use strata::scene::settings::{RenderSettings, SamplerKind};
-use strata::scene::{BumpMap, Camera, Material, NoiseKind, Projection, Scene};
+use strata::scene::{BumpMap, Material, NoiseKind, Scene};
 use strata::vk::{Gpu, GpuOptions};
 
 const SIZE: u32 = 96;
@@ -34,13 +32,7 @@ fn sphere(metallic: f32, roughness: f32, bump: f32) -> Scene {
         }),
         ..Default::default()
     });
-    place(&mut scene, "sphere", strata::scene::shapes::uv_sphere(1.0, 96, 48, Some(0)), Mat4::IDENTITY);
-    scene.camera = Some(Camera {
-        name: "front".into(),
-        world_from_camera: look_at(Vec3::new(0.0, 0.0, DISTANCE), Vec3::ZERO, Vec3::Y),
-        projection: Projection::Perspective { yfov: YFOV_DEGREES.to_radians(), znear: 0.1, zfar: Some(100.0) },
-        lens: Lens::PINHOLE,
-    });
+    strata::scene::library::add_sphere_in_view(&mut scene, 0, DISTANCE, YFOV_DEGREES);
     scene.environment = Some(Environment::uniform(Vec3::ONE));
     scene
 }

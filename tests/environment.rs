@@ -20,15 +20,14 @@ use strata::scene::{Camera, Light, LightShape, Projection, Scene};
 
 /// A unit sphere of `material` at the origin, seen from 3.2 m away with a 30° field of view.
 fn sphere_scene(material: impl FnOnce(&mut Scene) -> usize) -> Scene {
+    sphere_scene_from(3.2, material)
+}
+
+/// The same sphere seen from `distance`.
+fn sphere_scene_from(distance: f32, material: impl FnOnce(&mut Scene) -> usize) -> Scene {
     let mut scene = Scene::default();
     let m = material(&mut scene);
-    place(&mut scene, "sphere", strata::scene::shapes::uv_sphere(1.0, 96, 48, Some(m)), Mat4::IDENTITY);
-    scene.camera = Some(Camera {
-        name: "front".into(),
-        world_from_camera: look_at(Vec3::new(0.0, 0.0, 3.2), Vec3::ZERO, Vec3::Y),
-        projection: Projection::Perspective { yfov: 30f32.to_radians(), znear: 0.1, zfar: Some(100.0) },
-        lens: Lens::PINHOLE,
-    });
+    strata::scene::library::add_sphere_in_view(&mut scene, m, distance, 30.0);
     scene
 }
 
@@ -338,8 +337,10 @@ fn a_white_dielectric_in_a_white_furnace_reflects_one_at_every_angle_and_bumps_m
     use strata::scene::{BumpMap, Material, NoiseKind};
     let gpu = GpuTest::new();
     let size = 64u32;
+    // 5 m away, so the grazing silhouette is in the 30° view: tan(asin(1/5)) / tan(15°) half images.
+    let distance = 5.0f32;
     for (roughness, bump) in [(0.2, 0.0), (0.5, 0.0), (0.2, 0.08)] {
-        let mut scene = sphere_scene(|s| {
+        let mut scene = sphere_scene_from(distance, |s| {
             s.materials.push(Material {
                 name: "white dielectric".into(),
                 base_color: glam::Vec4::ONE,
@@ -355,9 +356,6 @@ fn a_white_dielectric_in_a_white_furnace_reflects_one_at_every_angle_and_bumps_m
             });
             s.materials.len() - 1
         });
-        // 5 m away, so the grazing silhouette is in the 30° view: tan(asin(1/5)) / tan(15°) half images.
-        let distance = 5.0f32;
-        scene.camera.as_mut().unwrap().world_from_camera = look_at(Vec3::Z * distance, Vec3::ZERO, Vec3::Y);
         scene.environment = Some(Environment::uniform(Vec3::ONE));
         let s = RenderSettings { indirect: true, bounces: 16, ..settings(size, size, 64, SamplerKind::MultiJittered) };
         let frame = render(gpu.device(), &scene, &s);

@@ -7,6 +7,19 @@ use super::{Camera, Instance, Material, Mesh, Node, NodeTransform, Primitive, Pr
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 use std::path::PathBuf;
 
+/// A unit sphere of material `material` at the origin (96 × 48 segments), seen down −Z from `distance` through a
+/// pinhole of `yfov_degrees`: what the white-furnace and environment checks look at (tests/environment.rs,
+/// `examples/furnace_rings.rs`). It covers tan(asin(1 / distance)) / tan(yfov / 2) of the image's half height.
+pub fn add_sphere_in_view(scene: &mut Scene, material: usize, distance: f32, yfov_degrees: f32) {
+    place(scene, "sphere", uv_sphere(1.0, 96, 48, Some(material)), Mat4::IDENTITY);
+    scene.camera = Some(Camera {
+        name: "front".into(),
+        world_from_camera: look_at(Vec3::new(0.0, 0.0, distance), Vec3::ZERO, Vec3::Y),
+        projection: Projection::Perspective { yfov: yfov_degrees.to_radians(), znear: 0.1, zfar: Some(100.0) },
+        lens: super::camera::Lens::PINHOLE,
+    });
+}
+
 /// Every scene in the library by file stem.
 pub fn all() -> Vec<(&'static str, Scene)> {
     vec![
