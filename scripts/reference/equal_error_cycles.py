@@ -29,12 +29,13 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from equal_error import equal_error_table, relative_rmse, run_timed  # noqa: E402
 
 BOUNCES = 8
 
@@ -117,12 +118,6 @@ def write_sky(path, width=512):
         f.write(path)
 
 
-def run_timed(cmd):
-    start = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    return time.perf_counter() - start
-
-
 def strata_image(strata, gltf, sky, size, spp, seed, out, paths=1):
     seconds = run_timed([strata, "render", gltf, "--environment", sky, "--indirect", "--bounces", str(BOUNCES),
                          "--size", f"{size}x{size}", "--spp", str(max(spp // paths, 1)), "--shading-samples",
@@ -134,11 +129,6 @@ def cycles_image(python, gltf, sky, size, spp, seed, out):
     seconds = run_timed([python, "-c", CYCLES_CHILD, gltf, sky, str(size), str(spp), str(seed), out,
                          str(BOUNCES)])
     return read_exr_rgb(out), seconds
-
-
-def relative_rmse(image, reference, spp, reference_spp):
-    mse = np.mean((image - reference) ** 2) / (1.0 + spp / reference_spp)
-    return float(np.sqrt(mse) / np.mean(reference))
 
 
 def main():
@@ -157,7 +147,7 @@ def main():
     for path, what in ((gltf, "--gltf"), (args.strata, "--strata")):
         if not os.path.exists(path):
             sys.exit(f"equal_error_cycles: {what} {path} does not exist")
-    rows = {"strata": {}, "cycles": {}}
+    rows = {"strata": {}, "Cycles": {}}
     k = args.shading_samples
     with tempfile.TemporaryDirectory() as tmp:
         sky = os.path.join(tmp, "sky.exr")
@@ -179,30 +169,15 @@ def main():
                 tc = min(tc, cycles_image(args.python, gltf, sky, args.size, spp, 2,
                                           os.path.join(tmp, "t-cycles.exr"))[1])
             rows["strata"][spp] = (ts, relative_rmse(s, s_ref, spp, args.reference_spp))
-            rows["cycles"][spp] = (tc, relative_rmse(c, c_ref, spp, args.reference_spp))
+            rows["Cycles"][spp] = (tc, relative_rmse(c, c_ref, spp, args.reference_spp))
         # How far the two references are apart: the same scene and light, each renderer's own conventions.
         means = (float(np.mean(s_ref)), float(np.mean(c_ref)))
-    spps = sorted(rows["strata"])
-    ts = np.array([rows["strata"][n][0] for n in spps])
-    if len(spps) > 1:
-        b, a = np.polyfit(spps, ts, 1)
-    else:
-        a, b = 0.0, ts[0] / spps[0]
+    print(f"{args.gltf} under the sky, {args.size}x{args.size}, path traced ({BOUNCES} bounces); strata "
+          f"--shading-samples {k}; reference means strata {means[0]:.4f}, Cycles {means[1]:.4f}")
+    a, b, runs = equal_error_table(rows, "Cycles")
     result = {"gltf": args.gltf, "size": args.size, "bounces": BOUNCES, "shading_samples": k,
               "reference_means": {"strata": means[0], "cycles": means[1]},
-              "strata_fit": {"startup_s": a, "per_spp_s": b}, "runs": []}
-    print(f"{args.gltf} under the sky, {args.size}x{args.size}, path traced ({BOUNCES} bounces); strata "
-          f"--shading-samples {k}; its time fitted: {a:.2f} s + {b * 1000:.1f} ms/spp; reference means "
-          f"strata {means[0]:.4f}, Cycles {means[1]:.4f}")
-    print("spp | strata s, rel. RMSE | Cycles s, rel. RMSE | strata's time for Cycles' error | ratio")
-    for n in spps:
-        (t_s, e_s), (t_c, e_c) = rows["strata"][n], rows["cycles"][n]
-        needed = n * (e_s / e_c) ** 2
-        t_equal = a + b * needed
-        print(f"{n:4d} | {t_s:6.2f} {e_s:.4f} | {t_c:6.2f} {e_c:.4f} | {t_equal:6.2f} s ({needed:.0f} spp) | "
-              f"{t_equal / t_c:.2f}x")
-        result["runs"].append({"spp": n, "strata_s": t_s, "strata_rel_rmse": e_s, "cycles_s": t_c,
-                               "cycles_rel_rmse": e_c, "strata_equal_error_s": t_equal, "ratio": t_equal / t_c})
+              "strata_fit": {"startup_s": a, "per_spp_s": b}, "runs": runs}
     if args.json:
         print(json.dumps(result))
 

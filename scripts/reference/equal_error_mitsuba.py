@@ -23,16 +23,15 @@ N/K camera samples of K emitter and K BSDF samples each, its own way to do the s
 import argparse
 import json
 import os
-import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
 from scipy.ndimage import binary_dilation
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import cornell_mitsuba as cornell  # noqa: E402
+from equal_error import equal_error_table, relative_rmse as masked_relative_rmse, run_timed  # noqa: E402
 
 REFERENCE_SPP = 1024
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -50,12 +49,6 @@ scene = cornell.mitsuba_scene_dict(size, spp // k, integrator=integrator, sample
 image = mi.render(mi.load_dict(scene), seed=seed)
 np.save(out, np.array(image)[..., :3].astype(np.float64))
 """
-
-
-def run_timed(cmd):
-    start = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - start
 
 
 def strata_image(strata, gltf, size, spp, seed, out, paths=1):
@@ -76,9 +69,7 @@ def relative_rmse(image, reference, spp):
     # Outside the light and the pixels its edge covers in part (walls stay under 0.5, the light is 12.5): the
     # edge pixels' coverage noise is the same for both renderers and would swamp the shading noise measured.
     mask = ~binary_dilation(reference @ LUMA > 0.5, iterations=3)
-    mse = np.mean((image[mask] - reference[mask]) ** 2)
-    mse /= 1.0 + spp / REFERENCE_SPP
-    return float(np.sqrt(mse) / np.mean(reference[mask]))
+    return masked_relative_rmse(image, reference, spp, REFERENCE_SPP, mask)
 
 
 def main():
@@ -92,7 +83,7 @@ def main():
     parser.add_argument("--emitter-samples", type=int, default=1, help="Mitsuba's emitter (and BSDF) samples per "
                         "camera sample")
     args = parser.parse_args()
-    rows = {"strata": {}, "mitsuba": {}}
+    rows = {"strata": {}, "Mitsuba": {}}
     with tempfile.TemporaryDirectory() as tmp:
         gltf = os.path.join(tmp, "lambertian-cornell.gltf")
         cornell.write_gltf(gltf)
@@ -110,29 +101,12 @@ def main():
                 ts = min(ts, strata_image(args.strata, gltf, args.size, spp, 2, os.path.join(tmp, "t.exr"), k)[1])
                 tm = min(tm, mitsuba_image(args.size, spp, 2, os.path.join(tmp, "t.npy"), e)[1])
             rows["strata"][spp] = (ts, relative_rmse(s, s_ref, spp))
-            rows["mitsuba"][spp] = (tm, relative_rmse(m, m_ref, spp))
-    spps = sorted(rows["strata"])
-    ts = np.array([rows["strata"][n][0] for n in spps])
-    if len(spps) > 1:
-        b, a = np.polyfit(spps, ts, 1)
-    else:
-        a, b = 0.0, ts[0] / spps[0]
-    result = {"size": args.size, "runs": [], "strata_fit": {"startup_s": a, "per_spp_s": b},
-              "shading_samples": args.shading_samples, "emitter_samples": args.emitter_samples}
+            rows["Mitsuba"][spp] = (tm, relative_rmse(m, m_ref, spp))
     print(f"{args.size}x{args.size}, direct light; strata --shading-samples {args.shading_samples}, Mitsuba "
-          f"emitter_samples {args.emitter_samples}; strata's time fitted: {a:.2f} s + {b * 1000:.1f} ms/spp")
-    print("spp | strata s, rel. RMSE | mitsuba s, rel. RMSE | strata's time for mitsuba's error | ratio")
-    for n in spps:
-        (t_s, e_s), (t_m, e_m) = rows["strata"][n], rows["mitsuba"][n]
-        # Near n spp error falls as 1/sqrt(spp) (stratified sampling falls faster, so this overestimates the
-        # spp strata needs where it is behind, and underestimates where it is ahead).
-        needed = n * (e_s / e_m) ** 2
-        t_equal = a + b * needed
-        print(f"{n:4d} | {t_s:6.2f} {e_s:.4f} | {t_m:6.2f} {e_m:.4f} | {t_equal:6.2f} s ({needed:.0f} spp) | "
-              f"{t_equal / t_m:.2f}x")
-        result["runs"].append({"spp": n, "strata_s": t_s, "strata_rel_rmse": e_s, "mitsuba_s": t_m,
-                               "mitsuba_rel_rmse": e_m, "strata_equal_error_s": t_equal,
-                               "ratio": t_equal / t_m})
+          f"emitter_samples {args.emitter_samples}")
+    a, b, runs = equal_error_table(rows, "Mitsuba")
+    result = {"size": args.size, "runs": runs, "strata_fit": {"startup_s": a, "per_spp_s": b},
+              "shading_samples": args.shading_samples, "emitter_samples": args.emitter_samples}
     if args.json:
         print(json.dumps(result))
 
