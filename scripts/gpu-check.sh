@@ -52,7 +52,7 @@ pack_binaries() {
     # Without its line tables the binary fits the device machine's transfer limit beside strata.
     strip --strip-debug -o "$dir/suite" "$bin" || exit 1
     echo "$repo" > "$dir/built-in"
-    echo "gpu-check: packed strata and the test binaries into $dir ($(du -sh "$dir" | cut -f1))"
+    echo "gpu-check: packed strata and the test binary into $dir ($(du -sh "$dir" | cut -f1))"
 }
 if [ -n "$pack" ]; then
     pack_binaries "$pack"
