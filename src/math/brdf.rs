@@ -1,7 +1,8 @@
-//! CPU twin of the GGX pieces of `shaders/include/brdf.glsl` (glTF 2.0 Appendix B: GGX with the height-correlated
-//! Smith visibility; Heitz 2018's visible-normal sampling), and the table of the specular lobe's directional
-//! albedo the accumulation pass scales the diffuse base by, so that a surface reflects no more than it receives
-//! (docs/architecture.md, "Energy: the diffuse base under the specular layer").
+//! The table of the GGX specular lobe's directional albedo that the accumulation pass scales the diffuse base by,
+//! so that a surface reflects no more than it receives (docs/architecture.md, "Energy: the diffuse base under the
+//! specular layer"), and its lookup as the shader reads it. The GGX pieces themselves, the CPU twin of
+//! `shaders/include/brdf.glsl`'s, are `math::ggx`, which build.rs integrates the table with; they stay reachable
+//! here, where the library's users found them before the table moved to build time.
 pub use super::ggx::{ggx_alpha, ggx_d, sample_ggx_vndf, smith_g1, smith_visibility, specular_albedo_terms};
 
 /// The table's size (shared_constants.glsl): view cosines at cell centres (k + ½) / MU_STEPS, roughness at
