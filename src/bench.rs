@@ -81,6 +81,7 @@ pub fn time_gbuffer(
     let camera = scene.camera_at(scene.shutter.0);
     let timer = TimestampPool::new(device, "gbuffer bench timestamps", 2)?;
     let mut times = Vec::new();
+    let mut graph = crate::vk::frame_graph::FrameGraph::new(device);
     // One warm-up sample, then the measured ones with sub-pixel jitter as a render would use.
     for s in 0..=samples {
         let jitter = Vec2::new((s as f32 * 0.618_034).fract() - 0.5, (s as f32 * 0.414_214).fract() - 0.5);
@@ -88,7 +89,7 @@ pub fn time_gbuffer(
         timer.reset();
         submit_and_wait(device, "gbuffer bench sample", |cmd| {
             timer.write(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, 0);
-            pass.record(cmd, &gbuffer, &inputs, 0, &sample, crate::vk::commands::Access::NONE);
+            pass.record(&mut graph, cmd, &gbuffer, &inputs, 0, &sample);
             timer.write(cmd, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT, 1);
             Ok(())
         })?;

@@ -14,7 +14,6 @@ use super::textures::GpuTextures;
 use crate::scene::settings::Trace;
 use crate::shaders;
 use crate::vk::accel::AccelerationStructure;
-use crate::vk::commands::labelled;
 use crate::vk::descriptors::DescriptorSet;
 use crate::vk::pipeline::{Binding, Pipeline, RayTracingDesc};
 use crate::vk::sampler::{Sampler, SamplerDesc};
@@ -270,6 +269,14 @@ impl AccumulatePass {
     }
 
     /// The stage the pass's shaders run in (for timestamps after it).
+    /// The pass's debug label, which says how it traces.
+    pub fn label(&self) -> &'static str {
+        match self.tracer {
+            Tracer::Query(_) => "accumulate pass (ray queries)",
+            Tracer::Pipeline { .. } => "accumulate pass (ray-tracing pipeline)",
+        }
+    }
+
     pub fn stage(&self) -> vk::PipelineStageFlags2 {
         match self.tracer {
             Tracer::Query(_) => vk::PipelineStageFlags2::COMPUTE_SHADER,
@@ -308,8 +315,9 @@ impl AccumulatePass {
         Ok(set)
     }
 
-    /// Records one sample's dispatch (or trace); the caller has made the G-buffer readable and the TLAS built,
-    /// and zeroed the sample's counters (its tile queue starts at the first tile).
+    /// Records one sample's dispatch (or trace), unlabelled: it is the work of the frame graph's accumulate pass
+    /// (labelled [`Self::label`]), whose uses make the G-buffer readable and the TLAS built; the host zeroed the
+    /// sample's counters (its tile queue starts at the first tile).
     pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush) {
         let device = &self.device;
         let device_type = device.report.device_type;
@@ -321,10 +329,8 @@ impl AccumulatePass {
                     AccumulateLaunch::Workgroups(n) => n.clamp(1, MAX_WORKGROUPS),
                     AccumulateLaunch::OnePerTileOrPixel => workgroups_for(tiles, vk::PhysicalDeviceType::DISCRETE_GPU),
                 };
-                labelled(device, cmd, "accumulate pass (ray queries)", || {
-                    pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
-                    unsafe { device.raw.cmd_dispatch(cmd, groups, 1, 1) };
-                });
+                pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
+                unsafe { device.raw.cmd_dispatch(cmd, groups, 1, 1) };
             }
             Tracer::Pipeline { pipeline, table, commands, pixel_runs } => {
                 // Runs are dealt to one row of invocations, 8 per workgroup; otherwise one invocation per pixel.
@@ -333,21 +339,19 @@ impl AccumulatePass {
                     (true, AccumulateLaunch::Workgroups(n)) => (RUN_LENGTH * n.clamp(1, MAX_WORKGROUPS), 1),
                     (true, _) => (CPU_PIPELINE_INVOCATIONS, 1),
                 };
-                labelled(device, cmd, "accumulate pass (ray-tracing pipeline)", || {
-                    pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
-                    unsafe {
-                        commands.cmd_trace_rays(
-                            cmd,
-                            &table.raygen,
-                            &table.miss,
-                            &table.hit,
-                            &table.callable,
-                            width,
-                            height,
-                            1,
-                        )
-                    };
-                });
+                pipeline.bind(cmd, Some(set), bytemuck::bytes_of(push));
+                unsafe {
+                    commands.cmd_trace_rays(
+                        cmd,
+                        &table.raygen,
+                        &table.miss,
+                        &table.hit,
+                        &table.callable,
+                        width,
+                        height,
+                        1,
+                    )
+                };
             }
         }
     }

@@ -7,12 +7,13 @@ use super::accumulate_layout::AccumulatePush;
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::resolve::ResolvePass;
 pub use super::sample_slots::{camera_sample_at, gpu_camera, seed32};
-use super::sample_slots::{SampleRecord, SampleSlots};
+use super::sample_slots::{SampleRecord, SampleSlots, ACCELERATION_STRUCTURES};
 use super::SceneOnGpu;
 use crate::output::Frame;
 use crate::scene::settings::{Backdrop, Primary, RenderSettings, SamplerKind};
 use crate::scene::Scene;
-use crate::vk::commands::{buffer_barrier, memory_barrier, submit_and_wait, Access};
+use crate::vk::commands::{submit_and_wait, Access};
+use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::timer::TimestampPool;
 use crate::vk::{Buffer, Device, Image, MemoryLocation};
 use anyhow::{bail, Result};
@@ -268,8 +269,8 @@ pub fn render_samples(
     let resolve_set = resolve.descriptor_set(&targets.sums, targets.accumulation(), &targets.display)?;
     let resolved_images = super::resolve::ResolvedImages {
         set: &resolve_set,
+        sums: &targets.sums,
         accumulation: targets.accumulation(),
-        accumulation_last_read: targets.accumulation_last_read(accumulate.stage()),
         display: &targets.display,
         samples: held,
     };
@@ -301,6 +302,7 @@ pub fn render_samples(
         timer: timer.as_ref(),
         batch,
         traced,
+        ray_log: ray_log.as_ref().map(|log| log.buffer()),
     };
     let run = SampleRun { range: range_start..range_end, initial: initial.as_ref(), push: &frame_push };
     let (shadow_rays, secondary_rays, times) =
@@ -466,15 +468,6 @@ impl FrameTargets {
         }
     }
 
-    /// How the accumulation pass last read the float image before the resolve writes it: nothing read the
-    /// reference mode's own; the G-buffer's position was sampled by the accumulation pass at `stage`.
-    fn accumulation_last_read(&self, stage: vk::PipelineStageFlags2) -> Access {
-        match self.own_accumulation {
-            Some(_) => Access::NONE,
-            None => Access { stage, access: Access::SHADER_SAMPLED_READ.access },
-        }
-    }
-
     /// What the sums hold once the samples `rendered` are in, on top of `resume`'s: read back for a checkpoint or
     /// a part.
     fn held_sums(
@@ -514,7 +507,8 @@ enum SumsStart<'a> {
     From(&'a Buffer),
 }
 
-/// A sample's passes in the order they run, each with the barriers that make what it reads ready.
+/// A sample's passes in the order they run. Each declares what it reads and writes to the frame graph
+/// (`vk::frame_graph`), which places the barriers and layout transitions between them.
 struct SamplePasses<'a> {
     gbuffer: &'a GBufferPass,
     accumulate: &'a AccumulatePass,
@@ -525,6 +519,8 @@ struct SamplePasses<'a> {
     timer: Option<&'a TimestampPool>,
     batch: u32,
     traced: bool,
+    /// The buffer the first sample's accumulation pass logs its rays into (`FrameOptions::log_rays`).
+    ray_log: Option<&'a Buffer>,
 }
 
 /// The samples one run renders, the sums its first starts from (None: zero) and the push constants they share.
@@ -555,6 +551,8 @@ impl SamplePasses<'_> {
         let mut times = PassTimes::default();
         let (mut shadow_rays, mut secondary_rays) = (0u64, 0u64);
         let mut last_checkpoint = std::time::Instant::now();
+        // One graph for every batch: what the last batch left (layouts, last writes and reads) carries over.
+        let mut graph = FrameGraph::new(device);
         let mut done = start;
         while done < end {
             let count = self.batch.min(end - done);
@@ -571,7 +569,7 @@ impl SamplePasses<'_> {
                 (true, None) => SumsStart::Zero,
             };
             submit_and_wait(device, "sample batch", |cmd| {
-                self.record_batch(cmd, targets, slots, &samples, batch_start, last.then_some(resolved));
+                self.record_batch(&mut graph, cmd, targets, slots, &samples, batch_start, last.then_some(resolved));
                 Ok(())
             })?;
             let (shadow, secondary) = slots.rays_counted(count)?;
@@ -594,11 +592,13 @@ impl SamplePasses<'_> {
         Ok((shadow_rays, secondary_rays, times))
     }
 
-    /// Records a batch's samples, then makes their sums visible to the host (ray counters, checkpoints) and, for
-    /// the frame's last batch, resolves them (`resolve_into`). `sums` says how the batch's first sample finds the
-    /// sums.
+    /// Records a batch's samples, then hands their sums and ray counters to the host (ray counts, checkpoints)
+    /// and, for the frame's last batch, resolves them (`resolve_into`). `sums` says how the batch's first sample
+    /// finds the sums.
+    #[allow(clippy::too_many_arguments)]
     fn record_batch(
         &self,
+        graph: &mut FrameGraph,
         cmd: vk::CommandBuffer,
         targets: &FrameTargets,
         slots: &SampleSlots<'_>,
@@ -606,7 +606,6 @@ impl SamplePasses<'_> {
         sums: SumsStart<'_>,
         resolve_into: Option<&super::resolve::ResolvedImages<'_>>,
     ) {
-        let device = targets.sums.device();
         for (slot, sample) in samples.iter().enumerate() {
             let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
                 if let Some(timer) = self.timer {
@@ -614,9 +613,14 @@ impl SamplePasses<'_> {
                 }
             };
             let sums = if slot == 0 { sums } else { SumsStart::Continue };
-            self.record(cmd, targets, slots, slot as u32, sample, sums, &stamp);
+            self.record(graph, cmd, targets, slots, slot as u32, sample, sums, &stamp);
         }
-        memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::HOST_READ);
+        let mut to_host = vec![
+            Use::read_buffer(&targets.sums, Access::HOST_READ),
+            Use::read_buffer(&slots.counters, Access::HOST_READ),
+        ];
+        to_host.extend(self.ray_log.map(|log| Use::read_buffer(log, Access::HOST_READ)));
+        graph.pass(cmd, "sums and ray counts to the host", &to_host, || {});
         if let Some(images) = resolve_into {
             let stamp = |i: u32, stage: vk::PipelineStageFlags2| {
                 if let Some(timer) = self.timer {
@@ -624,18 +628,19 @@ impl SamplePasses<'_> {
                 }
             };
             stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
-            memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE);
-            self.resolve.record_fresh(cmd, images, &self.look);
+            self.resolve.record_into(graph, cmd, images, &self.look);
             stamp(1, vk::PipelineStageFlags2::COMPUTE_SHADER);
         }
     }
 
-    /// Records sample `slot`: its TLAS build, its G-buffer pass (the reference mode rasterises its one-texel
-    /// stand-in once, so the set reads defined texels), and its accumulation into the sums. `sums` says whether the
-    /// for the frame's first sample: the sums start from that buffer (a checkpoint or another part), or zero.
+    /// Records sample `slot`'s passes: its acceleration-structure builds, its G-buffer pass (the reference mode
+    /// rasterises its one-texel stand-in once, so the set reads defined texels), where the sums start (`sums`: as
+    /// the previous sample left them, from zero, or from a checkpoint's or another part's buffer), and its
+    /// accumulation into the sums.
     #[allow(clippy::too_many_arguments)]
     fn record(
         &self,
+        graph: &mut FrameGraph,
         cmd: vk::CommandBuffer,
         targets: &FrameTargets,
         slots: &SampleSlots<'_>,
@@ -647,29 +652,40 @@ impl SamplePasses<'_> {
         let device = targets.sums.device();
         let first = !matches!(sums, SumsStart::Continue);
         stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
-        slots.record_builds(cmd, slot);
+        slots.record_builds(graph, cmd, slot);
         stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
         if !self.traced || first {
-            let last_read = if first { Access::NONE } else { Access::SHADER_SAMPLED_READ };
-            self.gbuffer.record_for_sampling(cmd, &targets.gbuffer, &slots.draws, slot, &sample.camera, last_read);
+            self.gbuffer.record(graph, cmd, &targets.gbuffer, &slots.draws, slot, &sample.camera);
         }
         stamp(2, vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT);
-        let sums_written = || {
-            buffer_barrier(device, cmd, &targets.sums, Access::TRANSFER_WRITE, Access::COMPUTE_READ_WRITE);
-        };
+        let sums_written = Use::write_buffer(&targets.sums, Access::TRANSFER_WRITE);
         match sums {
-            SumsStart::Continue => memory_barrier(device, cmd, Access::COMPUTE_READ_WRITE, Access::COMPUTE_READ_WRITE),
-            SumsStart::Zero => {
-                unsafe { device.raw.cmd_fill_buffer(cmd, targets.sums.raw, 0, vk::WHOLE_SIZE, 0) };
-                sums_written();
-            }
+            SumsStart::Continue => {}
+            SumsStart::Zero => graph.pass(cmd, "sums start at zero", &[sums_written], || unsafe {
+                device.raw.cmd_fill_buffer(cmd, targets.sums.raw, 0, vk::WHOLE_SIZE, 0)
+            }),
             SumsStart::From(from) => {
-                let region = [vk::BufferCopy::default().size(from.size)];
-                unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, targets.sums.raw, &region) };
-                sums_written();
+                let uses = [Use::read_buffer(from, Access::TRANSFER_READ), sums_written];
+                graph.pass(cmd, "sums start from earlier samples", &uses, || {
+                    let region = [vk::BufferCopy::default().size(from.size)];
+                    unsafe { device.raw.cmd_copy_buffer(cmd, from.raw, targets.sums.raw, &region) }
+                })
             }
         }
-        self.accumulate.record(cmd, self.set, &sample.push);
+        let sampled = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+        let mut uses: Vec<Use> = targets
+            .gbuffer
+            .color
+            .iter()
+            .map(|image| Use::read_image(image, sampled, Access::SHADER_SAMPLED_READ))
+            .collect();
+        uses.extend([
+            Use::read_memory(ACCELERATION_STRUCTURES, Access::AS_COMPUTE_READ),
+            Use::write_buffer(&targets.sums, Access::COMPUTE_READ_WRITE),
+            Use::write_buffer(&slots.counters, Access::COMPUTE_READ_WRITE),
+        ]);
+        uses.extend(self.ray_log.map(|log| Use::write_buffer(log, Access::COMPUTE_READ_WRITE)));
+        graph.pass(cmd, self.accumulate.label(), &uses, || self.accumulate.record(cmd, self.set, &sample.push));
         stamp(3, self.accumulate.stage());
     }
 }

@@ -10,8 +10,9 @@ use crate::math::lens::CameraSample;
 use crate::scene::{Material, Scene};
 use crate::shaders;
 use crate::shaders::constants::{GBUFFER_BINDING_DRAWS, GBUFFER_BINDING_MATERIALS, GBUFFER_BINDING_TEXTURES};
-use crate::vk::commands::{image_barrier, labelled, submit_and_wait, Access};
+use crate::vk::commands::{submit_and_wait, Access};
 use crate::vk::descriptors::DescriptorSet;
+use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::pipeline::{Binding, GraphicsDesc, Pipeline};
 use crate::vk::readback::read_image;
 use crate::vk::{Buffer, Device, Image};
@@ -252,38 +253,32 @@ impl GBufferPass {
         Ok(GBufferInputs { draws, geometry: gpu_scene, _materials: materials, set, order, draw_of, deformed, slots })
     }
 
-    /// Records the pass into `cmd`: clears, draws, and leaves the colour images in `COLOR_ATTACHMENT_OPTIMAL`
-    /// (written by `COLOR_ATTACHMENT_OUTPUT`) for the caller's next barrier. `last_read` is how the colour
-    /// images were last read (`Access::NONE` on their first use); their old contents are discarded.
+    /// Records the pass into `cmd` as a pass of `graph`: clears and draws over every attachment (their old
+    /// contents discarded), which it leaves in `COLOR_ATTACHMENT_OPTIMAL` (and depth in
+    /// `DEPTH_ATTACHMENT_OPTIMAL`) for the next pass's uses.
     pub fn record(
         &self,
+        graph: &mut FrameGraph,
         cmd: vk::CommandBuffer,
         gbuffer: &GBuffer,
         inputs: &GBufferInputs,
         slot: u32,
         sample: &CameraSample,
-        last_read: Access,
     ) {
         let device = &self.device;
-        for image in &gbuffer.color {
-            image_barrier(
-                device,
-                cmd,
-                image,
-                (vk::ImageLayout::UNDEFINED, last_read),
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
-            );
-        }
-        // The previous pass's depth writes (if any) finish before this one clears.
-        let depth_before = if last_read == Access::NONE { Access::NONE } else { Access::DEPTH_ATTACHMENT };
-        image_barrier(
-            device,
-            cmd,
+        let mut uses: Vec<Use> = gbuffer
+            .color
+            .iter()
+            .map(|image| {
+                Use::overwrite_image(image, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE)
+            })
+            .collect();
+        uses.push(Use::overwrite_image(
             &gbuffer.depth,
-            (vk::ImageLayout::UNDEFINED, depth_before),
-            (vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL, Access::DEPTH_ATTACHMENT),
-        );
-        labelled(device, cmd, "gbuffer pass", || {
+            vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
+            Access::DEPTH_ATTACHMENT,
+        ));
+        graph.pass(cmd, "gbuffer pass", &uses, || {
             let attachments: Vec<vk::RenderingAttachmentInfo> = gbuffer
                 .color
                 .iter()
@@ -356,29 +351,6 @@ impl GBufferPass {
         });
     }
 
-    /// [`Self::record`], then the colour images to `SHADER_READ_ONLY_OPTIMAL` for the accumulation pass, which
-    /// samples them texel by texel: the pass owns both of its transitions.
-    pub fn record_for_sampling(
-        &self,
-        cmd: vk::CommandBuffer,
-        gbuffer: &GBuffer,
-        inputs: &GBufferInputs,
-        slot: u32,
-        sample: &CameraSample,
-        last_read: Access,
-    ) {
-        self.record(cmd, gbuffer, inputs, slot, sample, last_read);
-        for image in &gbuffer.color {
-            image_barrier(
-                &self.device,
-                cmd,
-                image,
-                (vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL, Access::COLOR_ATTACHMENT_WRITE),
-                (vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, Access::SHADER_SAMPLED_READ),
-            );
-        }
-    }
-
     /// Renders one sample and reads every attachment back (for AOVs and tests).
     pub fn render_to_host(
         &self,
@@ -387,8 +359,9 @@ impl GBufferPass {
         sample: &CameraSample,
     ) -> Result<GBufferFrame> {
         let device = &self.device;
+        let mut graph = FrameGraph::new(device);
         submit_and_wait(device, "gbuffer frame", |cmd| {
-            self.record(cmd, gbuffer, inputs, 0, sample, Access::NONE);
+            self.record(&mut graph, cmd, gbuffer, inputs, 0, sample);
             Ok(())
         })?;
         let mut floats = Vec::new();

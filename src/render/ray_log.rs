@@ -29,6 +29,11 @@ impl RayLog {
     }
 
     /// The address the accumulation pass's push constants carry.
+    /// The buffer the pass writes the rays into (for the frame graph's uses).
+    pub fn buffer(&self) -> &crate::vk::Buffer {
+        &self.buffer
+    }
+
     pub fn address(&self) -> vk::DeviceAddress {
         self.buffer.address
     }

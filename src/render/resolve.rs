@@ -5,8 +5,9 @@ use crate::scene::settings::ToneMap;
 use crate::shaders;
 use crate::shaders::constants::RESOLVE_TILE_SIZE;
 use crate::shaders::constants::{RESOLVE_BINDING_ACCUMULATION, RESOLVE_BINDING_DISPLAY, RESOLVE_BINDING_SUMS};
-use crate::vk::commands::labelled;
+use crate::vk::commands::{labelled, Access};
 use crate::vk::descriptors::DescriptorSet;
+use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::pipeline::{Binding, Pipeline};
 use crate::vk::{Buffer, Device, Image};
 use anyhow::Result;
@@ -55,8 +56,20 @@ impl ResolvePass {
         Ok(set)
     }
 
-    /// Records the resolve of `samples` accumulated samples; both images are in `GENERAL`.
-    pub fn record(
+    /// Records the resolve of `samples` accumulated samples, labelled; both images are in `GENERAL`.
+    fn record(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: &DescriptorSet,
+        extent: vk::Extent2D,
+        samples: u32,
+        look: &DisplayLook,
+    ) {
+        labelled(&self.device, cmd, "resolve pass", || self.dispatch(cmd, set, extent, samples, look));
+    }
+
+    /// The resolve's push constants and dispatch, unlabelled.
+    fn dispatch(
         &self,
         cmd: vk::CommandBuffer,
         set: &DescriptorSet,
@@ -77,17 +90,15 @@ impl ResolvePass {
             transparent: u32::from(transparent),
             pad: [0; 2],
         };
-        labelled(&self.device, cmd, "resolve pass", || {
-            self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(&push));
-            unsafe {
-                self.device.raw.cmd_dispatch(
-                    cmd,
-                    extent.width.div_ceil(RESOLVE_TILE_SIZE),
-                    extent.height.div_ceil(RESOLVE_TILE_SIZE),
-                    1,
-                )
-            };
-        });
+        self.pipeline.bind(cmd, Some(set), bytemuck::bytes_of(&push));
+        unsafe {
+            self.device.raw.cmd_dispatch(
+                cmd,
+                extent.width.div_ceil(RESOLVE_TILE_SIZE),
+                extent.height.div_ceil(RESOLVE_TILE_SIZE),
+                1,
+            )
+        };
     }
 }
 
@@ -118,15 +129,11 @@ pub fn resolve_sums(
     let pass = ResolvePass::new(device)?;
     let set = pass.descriptor_set(&upload, &accumulation, &display)?;
     let held = sums.samples.len();
-    let images = ResolvedImages {
-        set: &set,
-        accumulation: &accumulation,
-        accumulation_last_read: crate::vk::commands::Access::NONE,
-        display: &display,
-        samples: held,
-    };
+    let images =
+        ResolvedImages { set: &set, sums: &upload, accumulation: &accumulation, display: &display, samples: held };
+    let mut graph = FrameGraph::new(device);
     submit_and_wait(device, "resolve sums", |cmd| {
-        pass.record_fresh(cmd, &images, &look);
+        pass.record_into(&mut graph, cmd, &images, &look);
         Ok(())
     })?;
     pass.read_out(&images, look, auto_exposure)
@@ -135,11 +142,11 @@ pub fn resolve_sums(
 /// What a recorded resolve wrote into, for [`ResolvePass::read_out`].
 pub struct ResolvedImages<'a> {
     pub set: &'a DescriptorSet,
-    /// The linear mean, in `GENERAL`, last written by the resolve.
+    /// The fixed-point sums the resolve reads.
+    pub sums: &'a Buffer,
+    /// The linear mean, in `GENERAL`, last written by the resolve (a frame's resolve writes over the
+    /// G-buffer's position attachment, which the frame graph knows as the same image).
     pub accumulation: &'a Image,
-    /// How the float image was read before the resolve (its old contents are discarded either way): a frame's
-    /// resolve writes over the G-buffer's position, which the accumulation pass sampled.
-    pub accumulation_last_read: crate::vk::commands::Access,
     /// The display picture, in `GENERAL`, last written by the resolve.
     pub display: &'a Image,
     /// The sample count the resolve divided by.
@@ -147,21 +154,23 @@ pub struct ResolvedImages<'a> {
 }
 
 impl ResolvePass {
-    /// Records the resolve into images whose old contents do not matter (both go to `GENERAL`).
-    pub fn record_fresh(&self, cmd: vk::CommandBuffer, images: &ResolvedImages<'_>, look: &DisplayLook) {
-        use crate::vk::commands::{image_barrier, Access};
-        for (image, last_read) in [(images.display, Access::NONE), (images.accumulation, images.accumulation_last_read)]
-        {
-            image_barrier(
-                &self.device,
-                cmd,
-                image,
-                (vk::ImageLayout::UNDEFINED, last_read),
-                (vk::ImageLayout::GENERAL, Access::COMPUTE_WRITE),
-            );
-        }
+    /// Records the resolve as a pass of `graph`: it reads the sums and writes over both images (their old
+    /// contents discarded), which it leaves in `GENERAL` for [`Self::read_out`].
+    pub fn record_into(
+        &self,
+        graph: &mut FrameGraph,
+        cmd: vk::CommandBuffer,
+        images: &ResolvedImages<'_>,
+        look: &DisplayLook,
+    ) {
+        let general = vk::ImageLayout::GENERAL;
+        let uses = [
+            Use::read_buffer(images.sums, Access::COMPUTE_READ),
+            Use::overwrite_image(images.accumulation, general, Access::COMPUTE_WRITE),
+            Use::overwrite_image(images.display, general, Access::COMPUTE_WRITE),
+        ];
         let extent = images.accumulation.extent;
-        self.record(cmd, images.set, extent, images.samples, look);
+        graph.pass(cmd, "resolve pass", &uses, || self.dispatch(cmd, images.set, extent, images.samples, look));
     }
 
     /// Reads a finished resolve back: the linear mean, then — with `auto_exposure` — the resolve again at the
@@ -173,7 +182,7 @@ impl ResolvePass {
         look: DisplayLook,
         auto_exposure: bool,
     ) -> Result<ResolvedSums> {
-        use crate::vk::commands::{image_barrier, submit_and_wait, Access};
+        use crate::vk::commands::{image_barrier, submit_and_wait};
         use crate::vk::readback::read_image;
         let device = &self.device;
         let ResolvedImages { set, accumulation, display, samples, .. } = *images;

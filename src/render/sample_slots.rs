@@ -15,6 +15,8 @@ use crate::math::sampling::{sample_1d, sample_2d};
 use crate::scene::settings::RenderSettings;
 use crate::scene::{Projection, Scene};
 use crate::vk::accel::DynamicTlas;
+use crate::vk::commands::Access;
+use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::{Buffer, Device, MemoryLocation};
 use anyhow::Result;
 use ash::vk;
@@ -23,6 +25,10 @@ use std::sync::Arc;
 
 /// Sampler dimensions the host draws once per sample for the whole image (docs/architecture.md's order).
 use crate::shaders::constants::{DIM_LENS, DIM_PIXEL, DIM_TIME};
+
+/// What a frame graph knows the TLAS and the deformed instances' BLASes by (the builds write them, with their
+/// scratch; ray queries read them through the TLAS's handle): their barriers are global memory barriers.
+pub const ACCELERATION_STRUCTURES: &str = "acceleration structures";
 
 /// The 32-bit seed the shaders hash from the 64-bit setting.
 pub fn seed32(seed: u64) -> u32 {
@@ -193,12 +199,14 @@ impl<'a> SampleSlots<'a> {
         self.deformed_rays.as_ref().map_or(&self.ray_scene.records, |d| &d.records)
     }
 
-    /// Records sample `slot`'s acceleration-structure builds: the deformed instances' BLASes, then the TLAS.
-    pub fn record_builds(&self, cmd: vk::CommandBuffer, slot: u32) {
+    /// Records sample `slot`'s acceleration-structure builds as passes of `graph`: the deformed instances'
+    /// BLASes, then the TLAS, which refers to them. Each writes [`ACCELERATION_STRUCTURES`].
+    pub fn record_builds(&self, graph: &mut FrameGraph, cmd: vk::CommandBuffer, slot: u32) {
+        let builds = [Use::write_memory(ACCELERATION_STRUCTURES, Access::AS_BUILD_READ_WRITE)];
         if let Some(deformed) = &self.deformed_rays {
-            deformed.record_builds(cmd, slot);
+            graph.pass(cmd, "deformed BLAS builds", &builds, || deformed.record_builds(cmd, slot));
         }
-        self.tlas.record_build(cmd, slot);
+        graph.pass(cmd, "TLAS build", &builds, || self.tlas.record_build(cmd, slot));
     }
 
     /// Zeroes the ray counters (and tile queues) of `slots` slots before a batch.

@@ -276,8 +276,8 @@ impl DynamicTlas {
         self.instances.write(offset, bytemuck::cast_slice(&records))
     }
 
-    /// Records a full rebuild from `slot`'s instances, then a barrier that makes the result visible to ray
-    /// queries in compute shaders. The caller orders it after earlier readers of the TLAS.
+    /// Records a full rebuild from `slot`'s instances; the caller orders it after earlier builds and readers of
+    /// the TLAS and before its next readers (`record_rebuild`).
     pub fn record_build(&self, cmd: vk::CommandBuffer, slot: u32) {
         let offset = u64::from(slot) * u64::from(self.instance_count.max(1)) * INSTANCE_RECORD_SIZE;
         let geometry = [instances_geometry(self.instances.address + offset)];
@@ -289,36 +289,16 @@ impl DynamicTlas {
     }
 }
 
-/// Records a build into `build_info`'s destination, which earlier builds and ray queries in compute shaders may
-/// still be using: first a barrier after them (scratch and structure writes, reads of the old result), then the
-/// build, then a barrier that makes the result visible to ray queries in compute shaders.
+/// Records a build into `build_info`'s destination. Earlier builds and ray queries may still use the structure
+/// and its scratch, and later ones read the result: the caller's frame-graph pass orders it both ways, by
+/// declaring that it writes the structures (`vk::frame_graph`).
 fn record_rebuild(
     device: &Device,
     cmd: vk::CommandBuffer,
     build_info: vk::AccelerationStructureBuildGeometryInfoKHR<'_>,
     ranges: &[vk::AccelerationStructureBuildRangeInfoKHR],
 ) {
-    // The previous build (scratch and structure writes) and the ray queries that read its result must be
-    // done before this one overwrites both.
-    let before = Access {
-        stage: vk::PipelineStageFlags2::from_raw(
-            Access::AS_BUILD_WRITE.stage.as_raw() | Access::AS_COMPUTE_READ.stage.as_raw(),
-        ),
-        access: vk::AccessFlags2::from_raw(
-            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
-                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
-        ),
-    };
-    let build = Access {
-        stage: Access::AS_BUILD_WRITE.stage,
-        access: vk::AccessFlags2::from_raw(
-            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
-                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
-        ),
-    };
-    memory_barrier(device, cmd, before, build);
     unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[build_info], &[ranges]) };
-    memory_barrier(device, cmd, Access::AS_BUILD_WRITE, Access::AS_COMPUTE_READ);
 }
 
 /// A BLAS rebuilt many times over geometry of the same shape whose vertices move (a deformed instance, once per
@@ -345,8 +325,8 @@ impl DynamicBlas {
         Ok(Self { structure, scratch, counts, device: device.clone() })
     }
 
-    /// Records a full rebuild from `geometries` (the same triangle counts as at creation), between the barriers
-    /// of `record_rebuild`. The caller orders it after the writes of the vertices it reads.
+    /// Records a full rebuild from `geometries` (the same triangle counts as at creation). The caller orders it
+    /// after the writes of the vertices it reads, and against the structure's other uses (`record_rebuild`).
     pub fn record_build(&self, cmd: vk::CommandBuffer, geometries: &[TriangleGeometry]) {
         let raw: Vec<vk::AccelerationStructureGeometryKHR> = geometries.iter().map(triangles).collect();
         debug_assert_eq!(geometries.iter().map(|g| g.triangle_count).collect::<Vec<_>>(), self.counts);

@@ -165,6 +165,15 @@ impl Access {
         stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
         access: vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
     };
+    /// An acceleration-structure build: it writes its structure and scratch, and reads the structures it
+    /// refers to (a TLAS its BLASes) and, as an update, its own.
+    pub const AS_BUILD_READ_WRITE: Access = Access {
+        stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+        access: vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw()
+                | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw(),
+        ),
+    };
     pub const AS_BUILD_READ: Access = Access {
         stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
         access: vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
@@ -178,7 +187,7 @@ impl Access {
 /// A barrier's stage mask as recorded: where pipelines are enabled, the compute stage stands for every stage
 /// that may trace rays (`Device::tracing_stages`), so that one `Access` covers the accumulation pass whether it
 /// runs as a compute shader or as a ray-tracing pipeline.
-fn recorded(device: &Device, stage: vk::PipelineStageFlags2) -> vk::PipelineStageFlags2 {
+pub(super) fn recorded(device: &Device, stage: vk::PipelineStageFlags2) -> vk::PipelineStageFlags2 {
     if stage.contains(vk::PipelineStageFlags2::COMPUTE_SHADER) {
         stage | device.tracing_stages()
     } else {

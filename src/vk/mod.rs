@@ -5,6 +5,7 @@ pub mod context;
 pub mod descriptors;
 pub mod device;
 pub mod features;
+pub mod frame_graph;
 pub mod instance;
 pub mod kept_pipelines;
 pub mod memory;
