@@ -138,12 +138,20 @@ pub fn render_aovs(
     let labels = scene.instances.iter().map(|i| i.node.map_or(0, |n| n as u32 + 1)).collect();
     let node_categories = scene.node_categories();
     let categories = scene.instances.iter().map(|i| i.node.and_then(|n| node_categories.get(n)).copied().unwrap_or(0));
+    let (camera_now, camera_next) = (centre_sample(now), centre_sample(next));
+    let deformed_flow = if aovs.contains(&render::aov::Aov::Motion) {
+        let interval = render::motion::FlowInterval { now: (now, &camera_now), next: (next, &camera_next) };
+        render::motion::deformed_flow(device, scene, on_gpu, (width, height), &interval)?
+    } else {
+        None
+    };
     let aov_scene = render::aov::AovScene {
         instance_labels: labels,
         categories: categories.collect(),
         moves: render::aov::AovScene::moves(&scene.instance_transforms_at(now), &scene.instance_transforms_at(next)),
-        camera_now: centre_sample(now),
-        camera_next: centre_sample(next),
+        camera_now,
+        camera_next,
+        deformed_flow,
     };
     aovs.iter().map(|&aov| Ok((aov, aov.extract(&frames[0], &aov_scene)?))).collect()
 }

@@ -363,6 +363,161 @@ fn simple_skin_covers_the_pixels_of_its_hand_skinned_shape() {
     gpu.finish().unwrap();
 }
 
+/// The motion AOV of a skinned mesh is each point's own motion: between the keys at 45° and 90° (half a second
+/// apart, one "frame" here) every pixel's flow is where the tutorial's hand skinning at 90° puts the point of the
+/// same triangle, at the same barycentric coordinates, that the pixel sees at 45° (the strip lies in z = 0 and the
+/// orthographic camera is still, so the flow is that displacement over the pixel size, y flipped).
+#[test]
+fn a_skinned_mesh_has_its_own_motion_in_the_motion_aov() {
+    use strata::render::aov::Aov;
+    let gpu = GpuTest::new();
+    let (size, half, center) = (64u32, 1.0f32, glam::Vec2::new(-0.25, 0.75));
+    let indices: Vec<u32> = vec![0, 1, 3, 0, 3, 2, 2, 3, 5, 2, 5, 4, 4, 5, 7, 4, 7, 6, 6, 7, 9, 6, 9, 8];
+    let file_vertex = |i: u32| Vec3::new((i % 2) as f32, (i / 2) as f32 * 0.5, 0.0);
+    let mut scene = simple_skin();
+    scene.camera = Some(facing_the_strip(center.x, center.y, half));
+    scene.shutter = (0.5, 0.5);
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
+    let aovs = [Aov::Motion, Aov::Instance];
+    let frames = strata::render_aovs(gpu.device(), &scene, &on_gpu, (size, size), &aovs, 0.5).unwrap();
+    let [(_, motion), (_, labels)] = <[_; 2]>::try_from(frames).ok().unwrap();
+    let triangles_at = |theta: f32| -> Vec<[glam::Vec2; 3]> {
+        indices.chunks(3).map(|c| [0, 1, 2].map(|k| hand_skinned(file_vertex(c[k]), theta).truncate())).collect()
+    };
+    // The joint's angle at each end as the file's keys give it (rounded to 3 digits: 44.98° and 89.99°), read off
+    // its world transform T(0, 1, 0)·Rz(θ).
+    let angle_at = |t: f32| {
+        let joint = scene.node_world_transforms(Some(t))[2];
+        joint.x_axis.y.atan2(joint.x_axis.x)
+    };
+    let (now, next) = (triangles_at(angle_at(0.5)), triangles_at(angle_at(1.0)));
+    let pixel = 2.0 * half / size as f32;
+    let (mut checked, mut moving, mut worst) = (0, 0, 0.0f32);
+    for y in 0..size {
+        for x in 0..size {
+            let p = center
+                + glam::Vec2::new(x as f32 + 0.5 - size as f32 / 2.0, size as f32 / 2.0 - y as f32 - 0.5) * pixel;
+            let edge = now.iter().map(|&tri| inside_and_edge_distance(p, tri).1).fold(f32::INFINITY, f32::min);
+            let Some(k) = now.iter().position(|&tri| inside_and_edge_distance(p, tri).0) else {
+                if edge > 0.5 * pixel {
+                    assert_eq!(motion.pixel(x, y), [0.0; 4], "background at ({x}, {y})");
+                }
+                continue;
+            };
+            // Rasterisation decides pixels whose centre is on an edge by its own rules: those are not checked.
+            if edge < 0.5 * pixel {
+                continue;
+            }
+            assert_eq!(labels.pixel(x, y)[0], 1.0, "the skinned node at ({x}, {y})");
+            let [a, b, c] = now[k];
+            let area = (b - a).perp_dot(c - a);
+            let (wb, wc) = ((p - a).perp_dot(c - a) / area, (b - a).perp_dot(p - a) / area);
+            let [a1, b1, c1] = next[k];
+            let later = a1 + (b1 - a1) * wb + (c1 - a1) * wc;
+            let expected = glam::Vec2::new(later.x - p.x, p.y - later.y) / pixel;
+            let got = glam::Vec2::from_slice(&motion.pixel(x, y)[..2]);
+            worst = worst.max((got - expected).length());
+            checked += 1;
+            moving += usize::from(expected.length() > 1.0);
+        }
+    }
+    eprintln!("skinned flow at {checked} pixels against the hand skinning: worst {worst:.2e} px");
+    // Most of the strip turns by several pixels: a flow from the (still) node transform alone would be zero.
+    assert!(checked > 150 && moving > 100, "{checked} pixels checked, {moving} moving more than a pixel");
+    // The rigid closed form's bound (data_capture.rs); measured 1.5e-5 px.
+    assert!(worst < 2e-3, "skinned flow off the hand skinning by {worst} px");
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
+/// The motion AOV of a morphing mesh on a moving, turning node: each pixel's flow is where the same barycentric
+/// point of the triangle it sees is one frame later — the morph at the later weights, placed by the node's
+/// transform then, seen by the (moving) camera then — minus where it is now. The triangle and its coordinates
+/// come from the position AOV; the vertices from `Scene::deform_instance` at both times.
+#[test]
+fn a_morphing_mesh_on_a_moving_node_has_its_own_motion_in_the_motion_aov() {
+    use strata::math::lens::{camera_sample, project_to_pixel};
+    use strata::render::aov::Aov;
+    use strata::scene::{NodeMotion, RigidMotion};
+    let gpu = GpuTest::new();
+    let size = 64u32;
+    let mut scene =
+        strata::load_scene(&common::cli::repo_file("tests/data/gltf-samples/MorphStressTest.gltf")).unwrap();
+    scene.add_default_light();
+    let motion = RigidMotion { velocity: Vec3::new(0.1, 0.0, 0.0), angular_velocity: Vec3::new(0.0, 0.3, 0.0) };
+    scene.node_motion.push(NodeMotion { node: 0, motion });
+    scene.camera_motion = RigidMotion { velocity: Vec3::new(0.0, 0.05, 0.0), angular_velocity: Vec3::ZERO };
+    // From halfway to the first key to the key whose weights differ most from the first's.
+    let keys = morph_stress_keys(&scene);
+    let change = |w: &[f32]| w.iter().zip(&keys[0].1).map(|(a, b)| (a - b).abs()).sum::<f32>();
+    let far = keys.iter().max_by(|a, b| change(&a.1).total_cmp(&change(&b.1))).unwrap();
+    let (now, next) = (0.5 * keys[1].0, far.0);
+    scene.shutter = (now, now);
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &scene).unwrap();
+    let aovs = [Aov::Motion, Aov::Position, Aov::Instance];
+    let frames = strata::render_aovs(gpu.device(), &scene, &on_gpu, (size, size), &aovs, next - now).unwrap();
+    let [(_, flow), (_, position), (_, labels)] = <[_; 3]>::try_from(frames).ok().unwrap();
+    let world_triangles = |t: f32| -> Vec<[Vec3; 3]> {
+        let nodes = scene.node_world_transforms(Some(t));
+        let place = scene.instance_transforms_from(&nodes)[0];
+        let deformed = scene.deform_instance(0, &nodes, Some(t)).unwrap();
+        let mesh = &scene.meshes[scene.instances[0].mesh];
+        mesh.primitives
+            .iter()
+            .zip(&deformed)
+            .flat_map(|(p, v)| {
+                p.indices.chunks(3).map(|c| [0, 1, 2].map(|k| place.transform_point3(v.positions[c[k] as usize])))
+            })
+            .collect()
+    };
+    let (triangles_now, triangles_next) = (world_triangles(now), world_triangles(next));
+    let camera_at = |t: f32| {
+        let mut camera = scene.camera_at(t);
+        camera.lens.aperture_radius = 0.0;
+        camera_sample(&camera, size, size, glam::Vec2::splat(0.5), glam::Vec2::ZERO)
+    };
+    let (camera_now, camera_next) = (camera_at(now), camera_at(next));
+    let rigid = scene.instance_transforms_at(next)[0] * scene.instance_transforms_at(now)[0].inverse();
+    let (mut checked, mut morphing, mut worst) = (0, 0, 0.0f32);
+    for y in 0..size {
+        for x in 0..size {
+            let p = position.pixel(x, y);
+            if p[3] == 0.0 {
+                continue;
+            }
+            assert_eq!(labels.pixel(x, y)[0], 1.0, "the morphing node at ({x}, {y})");
+            let point = Vec3::new(p[0], p[1], p[2]);
+            // The triangle the point lies on, well inside it (rasterisation decides shared edges its own way).
+            let found = triangles_now.iter().enumerate().find_map(|(k, &[a, b, c])| {
+                let n = (b - a).cross(c - a);
+                let off_plane = (point - a).dot(n.normalize()).abs();
+                let (wb, wc) = (
+                    (point - a).cross(c - a).dot(n) / n.length_squared(),
+                    (b - a).cross(point - a).dot(n) / n.length_squared(),
+                );
+                (off_plane < 1e-4 && wb > 1e-3 && wc > 1e-3 && wb + wc < 1.0 - 1e-3).then_some((k, wb, wc))
+            });
+            let Some((k, wb, wc)) = found else { continue };
+            let [a, b, c] = triangles_next[k];
+            let later = a + (b - a) * wb + (c - a) * wc;
+            let now_pixel = project_to_pixel(&camera_now, point, size, size);
+            let expected = project_to_pixel(&camera_next, later, size, size) - now_pixel;
+            let got = glam::Vec2::from_slice(&flow.pixel(x, y)[..2]);
+            worst = worst.max((got - expected).length());
+            checked += 1;
+            let rigid_only = project_to_pixel(&camera_next, rigid.transform_point3(point), size, size) - now_pixel;
+            morphing += usize::from((expected - rigid_only).length() > 0.5);
+        }
+    }
+    eprintln!("morphing flow at {checked} pixels against the deformed triangles: worst {worst:.2e} px");
+    // The morph moves part of the mesh by more than half a pixel beyond what the node's motion does (measured:
+    // 32 of 498 pixels), where a flow from the node's transform alone would be off.
+    assert!(checked > 400 && morphing >= 20, "{checked} pixels checked, {morphing} moved by the morph");
+    assert!(worst < 2e-3, "morphing flow off by {worst} px");
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
 #[test]
 fn identity_joint_matrices_render_exactly_as_the_unskinned_mesh() {
     use strata::scene::settings::SamplerKind;

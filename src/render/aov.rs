@@ -47,6 +47,9 @@ pub struct AovScene {
     /// The pixel-centre camera now and one frame later.
     pub camera_now: crate::math::lens::CameraSample,
     pub camera_next: crate::math::lens::CameraSample,
+    /// The motion pass's flow of the deformed instances (`render::motion::deformed_flow`): x, y, the instance + 1
+    /// it drew, coverage. None when nothing deforms.
+    pub deformed_flow: Option<Frame>,
 }
 
 impl Aov {
@@ -132,7 +135,13 @@ impl Aov {
                     }
                     Aov::Motion => match instance {
                         Some(k) => {
-                            let [fx, fy] = flow(scene, k, glam::Vec4::from(px(POSITION)).truncate(), g.width, g.height);
+                            // A deformed instance's flow is the motion pass's where it drew the surface the
+                            // G-buffer sees; a rigid one's is its transform's, worked out here.
+                            let drawn = scene.deformed_flow.as_ref().map(|f| f.pixel(x, y));
+                            let [fx, fy] = match drawn.filter(|p| p[3] > 0.0 && p[2] == (k + 1) as f32) {
+                                Some(p) => [p[0], p[1]],
+                                None => flow(scene, k, glam::Vec4::from(px(POSITION)).truncate(), g.width, g.height),
+                            };
                             [fx, fy, 0.0, covered]
                         }
                         None => [0.0, 0.0, 0.0, 0.0],

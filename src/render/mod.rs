@@ -11,6 +11,7 @@ pub mod gbuffer_encoding;
 pub mod gbuffer_layout;
 pub mod gpu_scene;
 pub mod lights;
+pub mod motion;
 pub mod noise_probe;
 pub mod preview;
 pub mod ray_log;
