@@ -279,7 +279,7 @@ impl GBufferPass {
             Access::DEPTH_ATTACHMENT,
         ));
         graph.pass(cmd, "gbuffer pass", &uses, || {
-            let attachments: Vec<vk::RenderingAttachmentInfo> = gbuffer
+            let colors: Vec<(&Image, vk::ClearColorValue)> = gbuffer
                 .color
                 .iter()
                 .enumerate()
@@ -289,32 +289,12 @@ impl GBufferPass {
                     } else {
                         vk::ClearColorValue { float32: [0.0; 4] }
                     };
-                    vk::RenderingAttachmentInfo::default()
-                        .image_view(image.view)
-                        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                        .load_op(vk::AttachmentLoadOp::CLEAR)
-                        .store_op(vk::AttachmentStoreOp::STORE)
-                        .clear_value(vk::ClearValue { color: clear })
+                    (image, clear)
                 })
                 .collect();
-            let depth = vk::RenderingAttachmentInfo::default()
-                .image_view(gbuffer.depth.view)
-                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::DONT_CARE)
-                .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-            let extent = gbuffer.extent;
-            let rendering = vk::RenderingInfo::default()
-                .render_area(extent.into())
-                .layer_count(1)
-                .color_attachments(&attachments)
-                .depth_attachment(&depth);
+            crate::vk::commands::begin_cleared_rendering(device, cmd, gbuffer.extent, &colors, &gbuffer.depth);
             let push =
                 GBufferPush { clip_from_world: sample.clip_from_world(), view_z_row: sample.view_from_world.row(2) };
-            unsafe {
-                device.raw.cmd_begin_rendering(cmd, &rendering);
-                crate::vk::commands::set_full_viewport(device, cmd, extent);
-            }
             self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
             let first_draw = slot as usize * inputs.order.len();
             for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {

@@ -10,7 +10,7 @@ use crate::math::lens::CameraSample;
 use crate::output::Frame;
 use crate::scene::Scene;
 use crate::shaders;
-use crate::vk::commands::{set_full_viewport, submit_and_wait, Access};
+use crate::vk::commands::{begin_cleared_rendering, submit_and_wait, Access};
 use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::pipeline::{GraphicsDesc, Pipeline};
 use crate::vk::readback::read_image;
@@ -179,29 +179,8 @@ impl MotionPass {
         let mut graph = FrameGraph::new(device);
         submit_and_wait(device, "motion frame", |cmd| {
             graph.pass(cmd, "motion pass", &uses, || {
-                let color = [vk::RenderingAttachmentInfo::default()
-                    .image_view(flow.view)
-                    .image_layout(color_layout)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } })];
-                let depth_attachment = vk::RenderingAttachmentInfo::default()
-                    .image_view(depth.view)
-                    .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::DONT_CARE)
-                    .clear_value(vk::ClearValue {
-                        depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
-                    });
-                let rendering = vk::RenderingInfo::default()
-                    .render_area(extent.into())
-                    .layer_count(1)
-                    .color_attachments(&color)
-                    .depth_attachment(&depth_attachment);
-                unsafe {
-                    device.raw.cmd_begin_rendering(cmd, &rendering);
-                    set_full_viewport(device, cmd, extent);
-                }
+                let clear = vk::ClearColorValue { float32: [0.0; 4] };
+                begin_cleared_rendering(device, cmd, extent, &[(&flow, clear)], &depth);
                 self.pipeline.bind(cmd, Some(&set), bytemuck::bytes_of(push));
                 for (index, draw) in draws.iter().enumerate() {
                     let offset = draw.first_vertex * std::mem::size_of::<Vec3>() as u64;

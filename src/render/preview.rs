@@ -158,27 +158,8 @@ impl PreviewPass {
             );
             labelled(device, cmd, "preview pass", || {
                 let [r, g, b] = settings.background;
-                let color_attachment = [vk::RenderingAttachmentInfo::default()
-                    .image_view(color.view)
-                    .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [r, g, b, 1.0] } })];
-                let depth_attachment = vk::RenderingAttachmentInfo::default()
-                    .image_view(depth.view)
-                    .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                    .load_op(vk::AttachmentLoadOp::CLEAR)
-                    .store_op(vk::AttachmentStoreOp::DONT_CARE)
-                    .clear_value(vk::ClearValue {
-                        depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 },
-                    });
-                let rendering = vk::RenderingInfo::default()
-                    .render_area(extent.into())
-                    .layer_count(1)
-                    .color_attachments(&color_attachment)
-                    .depth_attachment(&depth_attachment);
-                unsafe { device.raw.cmd_begin_rendering(cmd, &rendering) };
-                crate::vk::commands::set_full_viewport(device, cmd, extent);
+                let clear = vk::ClearColorValue { float32: [r, g, b, 1.0] };
+                crate::vk::commands::begin_cleared_rendering(device, cmd, extent, &[(&color, clear)], &depth);
                 self.pipeline.bind(cmd, Some(&set), &[]);
                 let primitives = scene.instances.iter().flat_map(|i| gpu_scene.meshes[i.mesh].primitives.iter());
                 for ((draw_index, primitive), &uv1) in primitives.enumerate().zip(&reads_uv1) {

@@ -85,6 +85,42 @@ pub fn set_full_viewport(device: &Device, cmd: vk::CommandBuffer, extent: vk::Ex
     }
 }
 
+/// Begins dynamic rendering over all of `extent`: each of `colors` (in `COLOR_ATTACHMENT_OPTIMAL`) cleared to its
+/// value and stored, and `depth` (in `DEPTH_ATTACHMENT_OPTIMAL`) cleared to 1 and not stored; then sets the full
+/// viewport. The caller draws and ends rendering.
+pub fn begin_cleared_rendering(
+    device: &Device,
+    cmd: vk::CommandBuffer,
+    extent: vk::Extent2D,
+    colors: &[(&Image, vk::ClearColorValue)],
+    depth: &Image,
+) {
+    let color_attachments: Vec<vk::RenderingAttachmentInfo> = colors
+        .iter()
+        .map(|(image, clear)| {
+            vk::RenderingAttachmentInfo::default()
+                .image_view(image.view)
+                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::STORE)
+                .clear_value(vk::ClearValue { color: *clear })
+        })
+        .collect();
+    let depth_attachment = vk::RenderingAttachmentInfo::default()
+        .image_view(depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+    let rendering = vk::RenderingInfo::default()
+        .render_area(extent.into())
+        .layer_count(1)
+        .color_attachments(&color_attachments)
+        .depth_attachment(&depth_attachment);
+    unsafe { device.raw.cmd_begin_rendering(cmd, &rendering) };
+    set_full_viewport(device, cmd, extent);
+}
+
 /// Runs `record` inside a labelled region.
 pub fn labelled<R>(device: &Device, cmd: vk::CommandBuffer, label: &str, record: impl FnOnce() -> R) -> R {
     begin_label(device, cmd, label);

@@ -193,34 +193,25 @@ impl FrameGraph {
                     continue;
                 };
                 let (src_stage, dst_stage) = (recorded(device, from.stage), recorded(device, to.stage));
-                match (usage.key, layouts) {
-                    (Key::Image(raw), Some((old, new))) => images.push(
-                        vk::ImageMemoryBarrier2::default()
-                            .image(raw)
-                            .subresource_range(usage.range.expect("an image use has its range"))
-                            .old_layout(old)
-                            .new_layout(new)
-                            .src_stage_mask(src_stage)
-                            .src_access_mask(from.access)
-                            .dst_stage_mask(dst_stage)
-                            .dst_access_mask(to.access)
-                            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED),
-                    ),
-                    (Key::Image(raw), None) => images.push(
-                        vk::ImageMemoryBarrier2::default()
-                            .image(raw)
-                            .subresource_range(usage.range.expect("an image use has its range"))
-                            .old_layout(usage.layout)
-                            .new_layout(usage.layout)
-                            .src_stage_mask(src_stage)
-                            .src_access_mask(from.access)
-                            .dst_stage_mask(dst_stage)
-                            .dst_access_mask(to.access)
-                            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED),
-                    ),
-                    (Key::Buffer(raw), _) => buffers.push(
+                match usage.key {
+                    Key::Image(raw) => {
+                        // Without a transition the barrier keeps the image in the layout it is in.
+                        let (old, new) = layouts.unwrap_or((usage.layout, usage.layout));
+                        images.push(
+                            vk::ImageMemoryBarrier2::default()
+                                .image(raw)
+                                .subresource_range(usage.range.expect("an image use has its range"))
+                                .old_layout(old)
+                                .new_layout(new)
+                                .src_stage_mask(src_stage)
+                                .src_access_mask(from.access)
+                                .dst_stage_mask(dst_stage)
+                                .dst_access_mask(to.access)
+                                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED),
+                        )
+                    }
+                    Key::Buffer(raw) => buffers.push(
                         vk::BufferMemoryBarrier2::default()
                             .buffer(raw)
                             .offset(0)
@@ -232,7 +223,7 @@ impl FrameGraph {
                             .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                             .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED),
                     ),
-                    (Key::Memory(_), _) => memory.push(
+                    Key::Memory(_) => memory.push(
                         vk::MemoryBarrier2::default()
                             .src_stage_mask(src_stage)
                             .src_access_mask(from.access)
