@@ -131,6 +131,19 @@ def cycles_image(python, gltf, sky, size, spp, seed, out):
     return read_exr_rgb(out), seconds
 
 
+def strata_alone(args, gltf, sky, tmp):
+    """--strata-only: strata's least time and error per spp against its own reference, for comparing builds."""
+    k = args.shading_samples
+    ref, _ = strata_image(args.strata, gltf, sky, args.size, args.reference_spp, 1, os.path.join(tmp, "sref.exr"), k)
+    for spp in args.spp:
+        image, seconds = strata_image(args.strata, gltf, sky, args.size, spp, 2, os.path.join(tmp, f"s{spp}.exr"), k)
+        for _ in range(args.repeats - 1):
+            seconds = min(seconds, strata_image(args.strata, gltf, sky, args.size, spp, 2,
+                                                os.path.join(tmp, "t.exr"), k)[1])
+        error = relative_rmse(image, ref, spp, args.reference_spp)
+        print(f"strata {args.strata}: {spp} spp {seconds:.2f} s, error {error:.4f}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--gltf", default="scenes/showcase.gltf")
@@ -142,6 +155,8 @@ def main():
     parser.add_argument("--repeats", type=int, default=3, help="timed runs of each; the least counts")
     parser.add_argument("--shading-samples", type=int, default=1, help="strata's paths per camera sample")
     parser.add_argument("--json", action="store_true", help="print the figures as one JSON object")
+    parser.add_argument("--strata-only", action="store_true",
+                        help="render strata alone and print its time and error per spp (to compare strata builds)")
     args = parser.parse_args()
     gltf = os.path.abspath(args.gltf)
     for path, what in ((gltf, "--gltf"), (args.strata, "--strata")):
@@ -155,6 +170,8 @@ def main():
         # Warm both: Mesa's shader cache, and Blender's first start (add-ons, kernels), so neither pays a cost
         # once that the other does not.
         strata_image(args.strata, gltf, sky, 16, 1, 7, os.path.join(tmp, "warm.exr"))
+        if args.strata_only:
+            return strata_alone(args, gltf, sky, tmp)
         cycles_image(args.python, gltf, sky, 16, 1, 7, os.path.join(tmp, "warm-cycles.exr"))
         s_ref, _ = strata_image(args.strata, gltf, sky, args.size, args.reference_spp, 1,
                                 os.path.join(tmp, "sref.exr"), k)
