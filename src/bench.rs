@@ -245,6 +245,7 @@ pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TraceP
         alpha_tested: true,
         environment: false,
         chains: true,
+        dispersion: false,
         launch: AccumulateLaunch::DeviceDefault,
         table_shift: 0,
     };

@@ -29,7 +29,7 @@ fn document(buffer_entry: Value) -> Value {
         "asset": {"version": "2.0"},
         "extensionsUsed": ["KHR_texture_transform", "KHR_lights_punctual", "KHR_materials_emissive_strength",
                            "KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_specular",
-                           "KHR_materials_volume", "EXT_made_up_extension"],
+                           "KHR_materials_volume", "KHR_materials_dispersion", "EXT_made_up_extension"],
         "scenes": [{"nodes": [0, 1]}],
         "nodes": [{"mesh": 0}, {"translation": [0, 3, 0],
                    "extensions": {"KHR_lights_punctual": {"light": 0}}}],
@@ -46,6 +46,7 @@ fn document(buffer_entry: Value) -> Value {
                 "KHR_materials_transmission": {"transmissionFactor": 0.8, "transmissionTexture": {"index": 0,
                     "extensions": {"KHR_texture_transform": {"scale": [3, 1]}}}},
                 "KHR_materials_ior": {"ior": 1.33},
+                "KHR_materials_dispersion": {"dispersion": 0.5},
                 "KHR_materials_volume": {"thicknessFactor": 0.1, "attenuationDistance": 2.0,
                     "attenuationColor": [0.5, 1.0, 0.25]},
                 "KHR_materials_specular": {"specularFactor": 0.5, "specularColorFactor": [1, 0.8, 0.6],
@@ -135,6 +136,9 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!((m.transmission, m.ior), (0.8, 1.33));
     // KHR_materials_volume: σ = −ln(colour) / distance.
     assert_eq!((m.attenuation_color, m.attenuation_distance), (Vec3::new(0.5, 1.0, 0.25), 2.0));
+    // KHR_materials_dispersion: 20 / V_d, read as it is (no warning below names it).
+    assert_eq!(m.dispersion, 0.5);
+    assert!(m.disperses() && scene.disperses(), "transmissive and dispersive");
     let sigma = m.absorption();
     assert!((sigma - Vec3::new(2f32.ln() / 2.0, 0.0, 4f32.ln() / 2.0)).abs().max_element() < 1e-6, "{sigma}");
     let t = m.base_color_texture.unwrap().transform.unwrap();
@@ -173,6 +177,25 @@ fn check(scene: &strata::scene::Scene) {
     assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
     assert!(scene.warnings[0].contains("EXT_made_up_extension"));
     assert!(scene.warnings[1].contains("\"lit glass\": its normal texture uses TEXCOORD_1"), "{:?}", scene.warnings[1]);
+}
+
+/// A dispersion that is not a number at least 0 fails with the material's name and the extension's.
+#[test]
+fn a_dispersion_below_zero_or_not_a_number_names_its_material() {
+    let dir = temp_dir("bad-dispersion");
+    let bin = buffer();
+    std::fs::write(dir.join("data.bin"), &bin).unwrap();
+    for (value, says) in [(json!(-0.5), "at least 0"), (json!("strong"), "not a number")] {
+        let mut doc = document(json!({"byteLength": bin.len(), "uri": "data.bin"}));
+        doc["materials"][0]["extensions"]["KHR_materials_dispersion"]["dispersion"] = value;
+        let path = dir.join("bad.gltf");
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        let error = format!("{:#}", strata::load_scene(&path).unwrap_err());
+        assert!(
+            error.contains("lit glass") && error.contains("KHR_materials_dispersion") && error.contains(says),
+            "{error}"
+        );
+    }
 }
 
 /// A normal texture's transform that is not a KHR_texture_transform object fails with the material's name.

@@ -14,6 +14,7 @@ mod cli;
 mod contracts;
 mod data_capture;
 mod denoise;
+mod dispersion;
 mod distributed;
 mod environment;
 mod estimators;

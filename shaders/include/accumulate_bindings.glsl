@@ -19,6 +19,9 @@ layout(constant_id = 3) const uint HAS_ENVIRONMENT = 0u;
 // chain packing either, whose barriers make lavapipe run each workgroup's lanes as coroutines). Direct light
 // alone then costs about 15% less per sample and 0.25 s less pipeline creation (docs/performance.md).
 layout(constant_id = 4) const uint CHAINS = 1u;
+// 1: some transmissive material disperses (KHR_materials_dispersion, dispersion.glsl); 0: none, and the pipeline
+// holds none of its code (which also keeps every other scene's pixels the bits they were before it).
+layout(constant_id = 5) const uint DISPERSION = 0u;
 // The flags every ray starts with, besides its own: with no alpha-tested geometry every ray is opaque and the
 // alpha test is never reached.
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;

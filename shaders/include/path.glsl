@@ -4,6 +4,7 @@
 #ifndef PATH_GLSL
 #define PATH_GLSL
 #include "direct_light.glsl"
+#include "dispersion.glsl"
 #include "surface.glsl"
 
 // The nearest non-geometry light along a ray, if nearer than t_max: its radiance, and in `density` the
@@ -39,6 +40,8 @@ struct ChainRay {
     // ends at its hit: BSDF sampling's estimate of the direct light at the vertex it left (a path's last
     // vertex, or the diffuse lobe without diffuse interreflection).
     uint gather_only;
+    // The colour channel the path carries since it met a dispersive surface, else ALL_CHANNELS (dispersion.glsl).
+    uint channel;
 };
 
 // A cosine-weighted direction about n (Malley's method: the concentric disk projected up onto the hemisphere).
@@ -96,12 +99,43 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     return true;
 }
 
+// Whether surface `s` refracts each colour channel by its own index (dispersion.glsl): it disperses and transmits.
+bool disperses(Surface s) {
+    return DISPERSION != 0u && s.dispersion > 0.0 && s.m.transmission > 0.0;
+}
+
+// At a surface that disperses (disperses(s)): the path's channel, chosen here at random if it has none yet (the
+// vertex's roulette key, salted: independent of its lobe and light samples), and the surface's index for it.
+// Returns the factor on what the path finds from here on: 3 on a channel chosen here and 0 on the others, else 1.
+vec3 disperse(inout Surface s, vec3 v, inout ChainRay r, uint dim) {
+    vec3 weight = vec3(1.0);
+    if (r.channel == ALL_CHANNELS) {
+        uint key = sampling_key(pc.seed, r.pixel, dim + VERTEX_ROULETTE) ^ pcg_hash(path_index);
+        r.channel = min(uint(3.0 * unit_float(pcg_hash(key ^ 0x2545f491u))), 2u);
+        weight = vec3(0.0);
+        weight[r.channel] = 3.0;
+    }
+    s.m.ior = dispersed_ior(s.m.ior, s.dispersion, r.channel);
+    s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
+    return weight;
+}
+
 // The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
 vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
     if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
+    r.channel = ALL_CHANNELS;
+    bool dispersive = disperses(s);
+    vec3 weight = vec3(1.0);
+    if (dispersive) weight = disperse(s, v, r, DIM_FIRST_VERTEX);
     vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
     r.throughput = vec3(1.0);
     chain = CHAINS != 0u && next_chain_ray(s, v, 0u, r);
+    // The channel's weight last: Russian roulette above may judge the path without it (any survival
+    // probability is unbiased).
+    if (dispersive) {
+        r.throughput *= weight;
+        radiance *= weight;
+    }
     return radiance;
 }
 
@@ -152,6 +186,8 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over the
         // segment (KHR_materials_volume), for everything it finds here and beyond.
         if (s.inside) r.throughput *= exp(-s.absorption * t_hit);
+        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+        if (disperses(s)) r.throughput *= disperse(s, v, r, dim);
         float density = 0.0;
         float cos_light = abs(dot(s.geometric, r.dir));
         if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {
@@ -159,7 +195,6 @@ vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays)
         }
         radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
         if (r.gather_only != 0u) break;
-        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
         radiance += r.throughput * direct_light(s, v, r.pixel, dim, room_to_bounce(depth), shadow_rays);
         if (!next_chain_ray(s, v, depth, r)) break;
     }

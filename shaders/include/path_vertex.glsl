@@ -21,6 +21,7 @@ struct Surface {
     vec3 emission;
     bool inside;     // the incoming ray travels inside the material
     vec3 absorption; // σ per metre inside the material (KHR_materials_volume)
+    float dispersion; // 20 / V_d (KHR_materials_dispersion; dispersion.glsl), 0: none
     Shading m;
 };
 

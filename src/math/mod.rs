@@ -2,6 +2,7 @@
 //! GPU, and what tests and any CPU baking use.
 pub mod brdf;
 pub mod bump;
+pub mod dispersion;
 pub mod environment;
 pub mod ggx;
 pub mod lens;

@@ -166,6 +166,9 @@ pub struct AccumulateVariant {
     /// Paths may go on past the visible surface ([`paths_go_on`]); without it the pipeline holds no chain code
     /// (CHAINS).
     pub chains: bool,
+    /// Some transmissive material disperses (`Scene::disperses`); without it the pipeline holds no dispersion
+    /// code (DISPERSION).
+    pub dispersion: bool,
     pub launch: AccumulateLaunch,
     /// Bytes to move the shader binding table off its alignment (0 but in the test that breaks it on purpose).
     pub table_shift: u64,
@@ -173,8 +176,17 @@ pub struct AccumulateVariant {
 
 impl AccumulatePass {
     pub fn new(device: &Arc<Device>, variant: &AccumulateVariant) -> Result<Self> {
-        let AccumulateVariant { path, primary_rays, alpha_tested, environment, chains, launch, table_shift } = *variant;
-        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4.
+        let AccumulateVariant {
+            path,
+            primary_rays,
+            alpha_tested,
+            environment,
+            chains,
+            dispersion,
+            launch,
+            table_shift,
+        } = *variant;
+        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4, 5.
         let flag = u32::from;
         let bindings = Self::bindings(device.texture_array_size())?;
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
@@ -192,7 +204,7 @@ impl AccumulatePass {
                 ("accumulate.comp", shaders::ACCUMULATE_COMP),
                 &bindings,
                 push_constant_size,
-                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment), flag(chains)],
+                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment), flag(chains), flag(dispersion)],
             )?),
             TracePath::Pipeline => {
                 let runs = if pixel_runs { ", pixel runs" } else { "" };
@@ -212,6 +224,7 @@ impl AccumulatePass {
                             flag(pixel_runs),
                             flag(environment),
                             flag(chains),
+                            flag(dispersion),
                         ],
                     },
                 )?;

@@ -360,6 +360,7 @@ fn accumulate_variant(
         alpha_tested,
         environment: scene.environment.is_some(),
         chains: options.keep_chain_code || super::accumulate::paths_go_on(max_depth, bsdf_sampling_alone),
+        dispersion: scene.disperses(),
         launch: options.accumulate_launch,
         table_shift: options.misalign_shader_binding_table,
     })

@@ -182,7 +182,8 @@ pub struct GpuMaterial {
     pub specular_color: Vec4,
     pub specular_uv_rows: [Vec4; 2],
     pub specular_color_uv_rows: [Vec4; 2],
-    /// rgb: the absorption coefficient σ per metre inside (KHR_materials_volume, `Material::absorption`); w unused.
+    /// rgb: the absorption coefficient σ per metre inside (KHR_materials_volume, `Material::absorption`); w: the
+    /// dispersion, 20 / V_d (KHR_materials_dispersion; 0: none).
     pub absorption: Vec4,
 }
 
@@ -237,7 +238,7 @@ impl GpuMaterial {
             specular_color: m.specular_color.extend(0.0),
             specular_uv_rows: uv_rows(m.specular_texture),
             specular_color_uv_rows: uv_rows(m.specular_color_texture),
-            absorption: m.absorption().extend(0.0),
+            absorption: m.absorption().extend(m.dispersion),
         }
     }
 }

@@ -179,11 +179,23 @@ pub(super) fn warn_about_unread_uv_sets(scene: &mut Scene) {
     scene.warnings.extend(warnings);
 }
 
+/// `KHR_materials_dispersion`'s `dispersion` (20 / V_d; 0 without the extension): a number, at least 0.
+fn dispersion(m: &gltf::Material<'_>) -> Result<f32> {
+    let Some(extension) = m.extension_value("KHR_materials_dispersion") else { return Ok(0.0) };
+    let Some(value) = extension.get("dispersion") else { return Ok(0.0) };
+    let dispersion = value.as_f64().with_context(|| format!("\"dispersion\" is {value}, not a number"))? as f32;
+    if !(dispersion >= 0.0 && dispersion.is_finite()) {
+        bail!("\"dispersion\" is {dispersion}: it is 20 / the Abbe number, at least 0");
+    }
+    Ok(dispersion)
+}
+
 pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result<Material> {
     let pbr = m.pbr_metallic_roughness();
     let defaults = Material::default();
     let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0)));
     let normal_transform = normal_texture_transform(&m, &name, root)?;
+    let dispersion = dispersion(&m).with_context(|| format!("material \"{name}\": KHR_materials_dispersion"))?;
     Ok(Material {
         name,
         base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -226,6 +238,7 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
             .map(|v| Vec3::from_array(v.attenuation_color()))
             .unwrap_or(defaults.attenuation_color),
         attenuation_distance: m.volume().map(|v| v.attenuation_distance()).unwrap_or(defaults.attenuation_distance),
+        dispersion,
         bump: None,
         unlit: m.unlit(),
     })

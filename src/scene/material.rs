@@ -195,6 +195,10 @@ pub struct Material {
     /// inside the material (Beer–Lambert absorption); infinity: no absorption.
     pub attenuation_color: Vec3,
     pub attenuation_distance: f32,
+    /// `KHR_materials_dispersion`: 20 / the Abbe number V_d (0: none). The index of refraction follows Cauchy's
+    /// two-term equation through `ior` at 587.56 nm; a transmissive surface refracts each colour channel by its
+    /// own index (docs/architecture.md, "Dispersion").
+    pub dispersion: f32,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
     /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
@@ -229,6 +233,7 @@ impl Default for Material {
             specular_color_texture: None,
             attenuation_color: Vec3::ONE,
             attenuation_distance: f32::INFINITY,
+            dispersion: 0.0,
             bump: None,
             unlit: false,
         }
@@ -238,6 +243,11 @@ impl Default for Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emissive.max_element() > 0.0
+    }
+
+    /// Whether the material refracts each colour channel by its own index: it transmits and disperses.
+    pub fn disperses(&self) -> bool {
+        self.dispersion > 0.0 && self.transmission > 0.0
     }
 
     /// The absorption coefficient σ per metre inside the material (KHR_materials_volume): light crossing d metres

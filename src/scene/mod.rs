@@ -196,6 +196,11 @@ impl Scene {
         (lo.x <= hi.x).then_some((lo, hi))
     }
 
+    /// Whether some material refracts each colour channel by its own index (KHR_materials_dispersion).
+    pub fn disperses(&self) -> bool {
+        self.materials.iter().any(|m| m.disperses())
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.instances.iter().flat_map(|i| self.meshes[i.mesh].primitives.iter()).map(Primitive::triangle_count).sum()
     }
