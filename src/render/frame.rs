@@ -315,12 +315,7 @@ pub fn render_samples(
         samples,
         width,
         height,
-        // The reference mode traces each path's camera ray (the same ray for a camera sample's paths).
-        camera_rays: if traced {
-            u64::from(width) * u64::from(height) * u64::from(samples) * u64::from(settings.shading_samples)
-        } else {
-            0
-        },
+        camera_rays: if traced { camera_rays(settings, samples) } else { 0 },
         shadow_rays,
         secondary_rays,
         seconds: started.elapsed().as_secs_f64(),
@@ -334,6 +329,12 @@ pub fn render_samples(
     };
     let sums = if options.keep_sums { Some(held_sums(range_end)?) } else { None };
     Ok(RenderedFrame { linear, display, stats, ray_log, exposure, sums })
+}
+
+/// The camera rays the reference mode traces for `samples` camera samples: one per path (the same ray for a camera
+/// sample's paths).
+fn camera_rays(settings: &RenderSettings, samples: u32) -> u64 {
+    u64::from(settings.width) * u64::from(settings.height) * u64::from(samples) * u64::from(settings.shading_samples)
 }
 
 /// Room for every ray one sample's accumulation pass casts (`FrameOptions::log_rays`): per pixel and path at most
