@@ -190,18 +190,21 @@ fn gpu_tests_in_one_process_take_turns() {
 }
 
 /// A crash inside the driver or the layer ends the whole test binary; the message on stderr names the test that
-/// held the GPU. The test runs itself as a child process that takes the GPU and raises the signal a crash would.
+/// held the GPU, the thread, the faulting address and the call stack. The test runs itself as a child process that
+/// takes the GPU and reads an unmapped address, as a crashing driver would.
 #[test]
 fn a_crash_names_the_gpu_test_that_held_the_device() {
     use std::os::unix::process::ExitStatusExt as _;
     // The test's path in the one test binary (tests/suite.rs): its module, then its name.
     const NAME: &str = "validation_harness::a_crash_names_the_gpu_test_that_held_the_device";
     const CHILD: &str = "STRATA_TEST_CRASH_ON_PURPOSE";
+    const UNMAPPED: usize = 0x10;
     if std::env::var_os(CHILD).is_some() {
         let _gpu = common::GpuTest::raster_only();
-        // SAFETY: raising a signal is sound; the harness's handler names it and lets it end the process.
-        unsafe { libc::raise(libc::SIGSEGV) };
-        unreachable!("SIGSEGV ends the process");
+        // SAFETY: not sound, on purpose: the first page is never mapped on Linux, so the read faults, and the
+        // harness's handler reports the fault and lets it end the process.
+        unsafe { std::ptr::read_volatile(UNMAPPED as *const u8) };
+        unreachable!("the read faults");
     }
     let out = std::process::Command::new(std::env::current_exe().unwrap())
         .args([NAME, "--exact", "--nocapture"])
@@ -212,6 +215,14 @@ fn a_crash_names_the_gpu_test_that_held_the_device() {
     assert_eq!(out.status.signal(), Some(libc::SIGSEGV), "the signal must still end the child: {stderr}");
     let named = format!("strata: crashed with SIGSEGV while running the GPU test `{NAME}`");
     assert!(stderr.contains(&named), "stderr must say {named:?}:\n{stderr}");
+    // libtest names a test's thread after the test; the kernel keeps its first 15 bytes.
+    let thread = format!("in the thread \"{}\", at the address {UNMAPPED:#x}", &NAME[..15]);
+    assert!(stderr.contains(&thread), "stderr must say {thread:?}:\n{stderr}");
+    // The stack names the binary the fault happened in, by file and offset.
+    let binary = std::env::current_exe().unwrap();
+    let binary = binary.file_name().unwrap().to_string_lossy();
+    let frames = stderr.lines().skip_while(|l| !l.contains("the call stack")).filter(|l| l.contains("(+0x")).count();
+    assert!(frames >= 3 && stderr.contains(&format!("{binary}(")), "stderr must list the frames:\n{stderr}");
 }
 
 /// The ray-tracing pipeline's shader binding table is laid out from the device's limits: as laid out it draws no
