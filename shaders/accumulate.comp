@@ -29,30 +29,36 @@ shared vec3 group_chain_radiance[GROUP_SIZE];
 shared uint group_shadow_rays;
 shared uint group_secondary_rays;
 
-// One path of each pixel of an 8×8 tile, shaded by the workgroup (each lane its pixel): the visible surfaces'
-// own light, then their chains, packed. Returns the lane's path value. Called in uniform control flow (`last_path`
-// too): it holds the barriers around the packing.
+// One path of each pixel of an 8×8 tile, shaded by the workgroup in two rounds: each lane its own pixel's visible
+// vertex, then the first group_chain_count lanes the tile's chains, packed. Returns the lane's path value. Called
+// in uniform control flow (`last_path` too): it holds the barriers around the packing. The rounds share one call
+// of the shading body (trace_path says why).
 vec4 shade_tile(uvec2 pixel, uint lane, bool last_path, inout uint shadow_rays, inout uint secondary_rays) {
     bool in_image = pixel.x < pc.width && pixel.y < pc.height;
     vec4 value = vec4(0.0);
     bool chain = false;
-    ChainRay r;
-    if (in_image) {
-        value = shade_primary(pixel, lane, r, chain, shadow_rays);
-        if (CHAINS != 0u && chain) group_chains[atomicAdd(group_chain_count, 1u)] = r;
+    ChainRay r = start_path(pixel, lane);
+    // Uniform: CHAINS is a specialization constant; without chain code there is nothing to pack and no barrier.
+    uint rounds = CHAINS != 0u ? 2u : 1u;
+    for (uint round = 0u; round < rounds; round++) {
+        bool shading = round == 0u ? in_image : lane < group_chain_count;
+        if (round == 1u && shading) r = group_chains[lane];
+        bool goes_on = false;
+        vec4 part = vec4(0.0);
+        if (shading) part = trace_path(r, goes_on, shadow_rays, secondary_rays);
+        if (round == 0u) {
+            value = part;
+            chain = goes_on;
+            if (goes_on) group_chains[atomicAdd(group_chain_count, 1u)] = r;
+        } else if (shading) {
+            group_chain_radiance[r.lane] = part.rgb;
+        }
+        if (CHAINS != 0u) {
+            memoryBarrierShared();
+            barrier();
+        }
     }
-    // Nothing to pack: no barriers (uniform: a specialization constant).
     if (CHAINS == 0u) return path_value(value);
-    memoryBarrierShared();
-    barrier();
-
-    // The first group_chain_count lanes follow the chains, whichever pixels they came from.
-    if (lane < group_chain_count) {
-        ChainRay c = group_chains[lane];
-        group_chain_radiance[c.lane] = follow_chain(c, shadow_rays, secondary_rays);
-    }
-    memoryBarrierShared();
-    barrier();
 
     if (chain) value.rgb += group_chain_radiance[lane];
     if (!last_path) {

@@ -1,8 +1,9 @@
-// The chain of a path after its visible vertex: where it goes on (GGX gloss and translucency, diffuse bounces
-// with --indirect, Russian roulette) and what each ray finds. Part of the accumulation pass's shading body
-// (path_tracer.glsl).
+// A path from its visible vertex on: what each vertex adds, where the path goes on (GGX gloss and translucency,
+// diffuse bounces with --indirect, Russian roulette) and what each ray finds. Part of the accumulation pass's
+// shading body (path_tracer.glsl).
 #ifndef PATH_GLSL
 #define PATH_GLSL
+#include "camera_ray.glsl"
 #include "direct_light.glsl"
 #include "dispersion.glsl"
 #include "surface.glsl"
@@ -26,7 +27,8 @@ vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
     return result;
 }
 
-// Where a path goes on from one vertex: the next ray and what it carries.
+// Where a path stands between two vertices: the next ray and what it carries. Vertex 0 is the visible surface:
+// the G-buffer's, or where the camera ray (the reference mode) hits.
 struct ChainRay {
     vec3 origin;
     // Solid-angle density of a reflection (for MIS), 0 for a refraction, DIFFUSE_BOUNCE for a diffuse bounce.
@@ -36,6 +38,8 @@ struct ChainRay {
     vec3 throughput;
     uint lane;  // the invocation whose pixel it belongs to
     vec2 cone;  // the ray cone: width at the origin, spread angle (pixel_cone)
+    vec2 t_range;  // where along the ray a hit counts: the camera's near and far depths, or (0, 1e30)
+    uint depth;    // the vertex the ray leads to
     // 1: the ray only gathers the light it reaches (lights and emitters, not the background) and the path
     // ends at its hit: BSDF sampling's estimate of the direct light at the vertex it left (a path's last
     // vertex, or the diffuse lobe without diffuse interreflection).
@@ -96,6 +100,7 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
         r.throughput /= survive;
     }
     r.origin = offset_origin(s.position, s.geometric, r.dir);
+    r.t_range = vec2(0.0, 1e30);
     return true;
 }
 
@@ -120,25 +125,6 @@ vec3 disperse(inout Surface s, vec3 v, inout ChainRay r, uint dim) {
     return weight;
 }
 
-// The visible vertex: emission and one light sample. Returns whether a chain ray goes on from it.
-vec3 shade_visible(Surface s, vec3 v, inout ChainRay r, out bool chain, inout uint shadow_rays) {
-    if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
-    r.channel = ALL_CHANNELS;
-    bool dispersive = disperses(s);
-    vec3 weight = vec3(1.0);
-    if (dispersive) weight = disperse(s, v, r, DIM_FIRST_VERTEX);
-    vec3 radiance = s.emission + direct_light(s, v, r.pixel, DIM_FIRST_VERTEX, room_to_bounce(0u), shadow_rays);
-    r.throughput = vec3(1.0);
-    chain = CHAINS != 0u && next_chain_ray(s, v, 0u, r);
-    // The channel's weight last: Russian roulette above may judge the path without it (any survival
-    // probability is unbiased).
-    if (dispersive) {
-        r.throughput *= weight;
-        radiance *= weight;
-    }
-    return radiance;
-}
-
 // The weight of light a chain ray reaches, which light sampling chooses with solid-angle density
 // `light_density` (0: never, as for a refraction, which light sampling never covers: the ray has it alone).
 // With MIS a reflection (pdf > 0) shares it by the power heuristic and a diffuse bounce leaves it to light
@@ -160,45 +146,125 @@ vec3 escaped(ChainRay r) {
     return r.gather_only == 0u ? pc.background.rgb : vec3(0.0);
 }
 
-// The chain from vertex 1 on: each ray finds a light (MIS against light sampling; nothing for a diffuse
-// bounce), the background, or a surface whose emission and one light sample it adds before going on.
-vec3 follow_chain(ChainRay r, inout uint shadow_rays, inout uint secondary_rays) {
-    vec3 radiance = vec3(0.0);
-    for (uint depth = 1u; depth <= pc.max_depth; depth++) {
-        secondary_rays++;
-        log_ray(0u, r.origin, 0.0, r.dir, 1e30);
-        Hit h = trace_closest(r.origin, r.dir, 0.0, 1e30, r.cone);
-        bool hit = h.record != MISS;
-        float t_hit = hit ? h.t : 1e30;
-        float light_density;
-        vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
-        if (light != vec3(0.0)) {
-            radiance += r.throughput * light * reached_light_weight(r.pdf, light_density);
-            break;
-        }
-        if (!hit) {
-            radiance += r.throughput * escaped(r);
-            break;
-        }
-        vec3 v = -r.dir;
-        r.cone.x += r.cone.y * t_hit;
-        Surface s = hit_surface(h, v, r.cone.x, false);
-        // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over the
-        // segment (KHR_materials_volume), for everything it finds here and beyond.
-        if (s.inside) r.throughput *= exp(-s.absorption * t_hit);
-        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
-        if (disperses(s)) r.throughput *= disperse(s, v, r, dim);
-        float density = 0.0;
-        float cos_light = abs(dot(s.geometric, r.dir));
-        if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {
-            density = s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power);
-        }
-        radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
-        if (r.gather_only != 0u) break;
-        radiance += r.throughput * direct_light(s, v, r.pixel, dim, room_to_bounce(depth), shadow_rays);
-        if (!next_chain_ray(s, v, depth, r)) break;
+// The background a pixel of the G-buffer mode shows where it has no surface: along its ray through its own
+// sub-pixel point and the lens centre.
+vec3 background_behind(ivec2 p, uint pixel) {
+    vec3 o;
+    vec3 d;
+    vec2 t_range;
+    camera_ray(cameras[pc.counter_slot], p, camera_sample2(pixel, DIM_PIXEL) - 0.5, vec2(0.5), o, d, t_range);
+    return background_seen(d);
+}
+
+// A path of pixel `pixel` before its visible vertex: in the reference mode its camera ray through its own sub-pixel
+// point and lens point.
+ChainRay start_path(uvec2 pixel, uint lane) {
+    ChainRay r;
+    r.pixel = pixel.y * pc.width + pixel.x;
+    r.lane = lane;
+    r.depth = 0u;
+    r.pdf = 0.0;
+    r.throughput = vec3(1.0);
+    r.gather_only = 0u;
+    r.channel = ALL_CHANNELS;
+    r.cone = pixel_cone();
+    r.origin = vec3(0.0);
+    r.dir = vec3(0.0, 0.0, -1.0);
+    r.t_range = vec2(0.0, 1e30);
+    if (PRIMARY_RAYS != 0u) {
+        camera_ray(cameras[pc.counter_slot], ivec2(pixel), camera_sample2(r.pixel, DIM_PIXEL) - 0.5,
+                   camera_sample2(r.pixel, DIM_LENS), r.origin, r.dir, r.t_range);
     }
-    return radiance;
+    return r;
+}
+
+// Shades path `r` from vertex r.depth: the visible vertex alone (r.depth 0), or the chain after it. The visible
+// vertex adds its emission (or the background, with alpha 0) and one light sample; each chain ray finds a light
+// (MIS against light sampling; nothing for a diffuse bounce), the background, or a surface whose emission and one
+// light sample it adds before going on. `goes_on`: the visible vertex's path has a chain, whose ray `r` becomes.
+//
+// One body for every vertex, called from one site per shader (docs/performance.md, "Speed at equal error"):
+// lavapipe inlines every call, and with the visible vertex and the chain each holding a copy of direct light and its
+// shadow-ray traversal, LLVM took 1.4–2.2 times as long to compile the pass. The visible vertex multiplies by its
+// throughput of exactly 1, so it gives the bits it gave in a function of its own, with or without chain code.
+vec4 trace_path(inout ChainRay r, out bool goes_on, inout uint shadow_rays, inout uint secondary_rays) {
+    vec3 radiance = vec3(0.0);
+    float alpha = 0.0;
+    goes_on = false;
+    while (r.depth <= pc.max_depth) {
+        // Without chain code every call shades a visible vertex: a constant, so that none of the chain's code is
+        // compiled (a loop-carried depth kept it, and cost the pass three times its compile time).
+        uint depth = CHAINS != 0u ? r.depth : 0u;
+        r.depth = depth + 1u;
+        Surface s;
+        vec3 v;
+        float t_hit = 0.0;
+        if (depth == 0u && PRIMARY_RAYS == 0u) {
+            ivec2 p = ivec2(r.pixel % pc.width, r.pixel / pc.width);
+            uvec4 ids = read_gbuffer_surface_ids(p);
+            if (ids.x == 0u) {
+                radiance = background_behind(p, r.pixel);
+                break;
+            }
+            vec3 position = read_gbuffer_position(p);
+            v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
+            r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
+            s = gbuffer_surface(p, ids, v);
+        } else {
+            if (depth > 0u) secondary_rays++;
+            log_ray(0u, r.origin, r.t_range.x, r.dir, r.t_range.y);
+            Hit h = trace_closest(r.origin, r.dir, r.t_range.x, r.t_range.y, r.cone);
+            bool hit = h.record != MISS;
+            t_hit = hit ? h.t : 1e30;
+            if (depth > 0u) {
+                float light_density;
+                vec3 light = lights_along(r.origin, r.dir, t_hit, light_density);
+                if (light != vec3(0.0)) {
+                    radiance += r.throughput * light * reached_light_weight(r.pdf, light_density);
+                    break;
+                }
+            }
+            if (!hit) {
+                radiance += depth == 0u ? background_seen(r.dir) : r.throughput * escaped(r);
+                break;
+            }
+            v = -r.dir;
+            r.cone.x += r.cone.y * t_hit;
+            s = hit_surface(h, v, r.cone.x, depth == 0u);
+            // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over
+            // the segment (KHR_materials_volume), for everything it finds here and beyond.
+            if (depth > 0u && s.inside) r.throughput *= exp(-s.absorption * t_hit);
+        }
+        uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
+        // A dispersive visible vertex weighs its own light and its chain by the channel it chose, after Russian
+        // roulette (any survival probability is unbiased); deeper vertices weigh everything from the hit on.
+        vec3 channel_weight = vec3(1.0);
+        if (depth == 0u) {
+            alpha = 1.0;
+            if ((pc.sabotage & SABOTAGE_FLIPPED_NORMALS) != 0u) s.normal = -s.normal;
+            if (disperses(s)) channel_weight = disperse(s, v, r, dim);
+            radiance += s.emission;
+        } else {
+            if (disperses(s)) r.throughput *= disperse(s, v, r, dim);
+            float density = 0.0;
+            float cos_light = abs(dot(s.geometric, r.dir));
+            if (s.emitter_density > 0.0 && pc.total_light_power > 0.0 && cos_light > 0.0) {
+                density = s.emitter_density * t_hit * t_hit / (cos_light * pc.total_light_power);
+            }
+            radiance += r.throughput * s.emission * reached_light_weight(r.pdf, density);
+            if (r.gather_only != 0u) break;
+        }
+        radiance += r.throughput * direct_light(s, v, r.pixel, dim, room_to_bounce(depth), shadow_rays);
+        bool next = CHAINS != 0u && next_chain_ray(s, v, depth, r);
+        if (depth == 0u) {
+            r.throughput *= channel_weight;
+            radiance *= channel_weight;
+            goes_on = next;
+            break;
+        }
+        if (!next) break;
+    }
+    return vec4(radiance, alpha);
 }
 
 #endif

@@ -18,51 +18,6 @@
 #include "path.glsl"
 #include "camera_ray.glsl"
 
-// The visible surface's own light (or the background), for pixel `pixel` of the image: from the G-buffer, or
-// (PRIMARY_RAYS) from the pixel's own primary ray. `r` becomes the path's chain ray when `chain` is set.
-vec4 shade_primary(uvec2 pixel, uint lane, out ChainRay r, out bool chain, inout uint shadow_rays) {
-    ivec2 p = ivec2(pixel);
-    vec4 value = vec4(0.0);
-    chain = false;
-    r.pixel = pixel.y * pc.width + pixel.x;
-    r.lane = lane;
-    r.gather_only = 0u;
-    r.cone = pixel_cone();
-    if (PRIMARY_RAYS != 0u) {
-        vec3 o;
-        vec3 d;
-        vec2 t_range;
-        camera_ray(cameras[pc.counter_slot], p, camera_sample2(r.pixel, DIM_PIXEL) - 0.5,
-                   camera_sample2(r.pixel, DIM_LENS), o, d, t_range);
-        log_ray(0u, o, t_range.x, d, t_range.y);
-        Hit h = trace_closest(o, d, t_range.x, t_range.y, r.cone);
-        if (h.record != MISS) {
-            r.cone.x += r.cone.y * h.t;
-            Surface s = hit_surface(h, -d, r.cone.x, true);
-            value = vec4(shade_visible(s, -d, r, chain, shadow_rays), 1.0);
-        } else {
-            value = vec4(background_seen(d), 0.0);
-        }
-    } else {
-        uvec4 ids = read_gbuffer_surface_ids(p);
-        if (ids.x != 0u) {
-            vec3 position = read_gbuffer_position(p);
-            vec3 v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
-            r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
-            Surface s = gbuffer_surface(p, ids, v);
-            value = vec4(shade_visible(s, v, r, chain, shadow_rays), 1.0);
-        } else {
-            // The direction this pixel looks in, through its own sub-pixel point and the lens centre.
-            vec3 o;
-            vec3 d;
-            vec2 t_range;
-            camera_ray(cameras[pc.counter_slot], p, camera_sample2(r.pixel, DIM_PIXEL) - 0.5, vec2(0.5), o, d, t_range);
-            value = vec4(background_seen(d), 0.0);
-        }
-    }
-    return value;
-}
-
 // One path's value (its visible surface's light and its chain's) as the camera sample's mean takes it: a path
 // that went wrong must not poison the pixel's whole estimate.
 vec4 path_value(vec4 value) {
