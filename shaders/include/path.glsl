@@ -183,7 +183,7 @@ ChainRay start_path(uvec2 pixel, uint lane) {
 // (MIS against light sampling; nothing for a diffuse bounce), the background, or a surface whose emission and one
 // light sample it adds before going on. `goes_on`: the visible vertex's path has a chain, whose ray `r` becomes.
 //
-// One body for every vertex, called from one site per shader (docs/performance.md, "Speed at equal error"):
+// One body for every vertex, called from one site per shader (docs/performance.md, "One call of the shading body"):
 // lavapipe inlines every call, and with the visible vertex and the chain each holding a copy of direct light and its
 // shadow-ray traversal, LLVM took 1.4–2.2 times as long to compile the pass. The visible vertex multiplies by its
 // throughput of exactly 1, so it gives the bits it gave in a function of its own, with or without chain code.
