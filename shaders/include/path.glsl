@@ -156,6 +156,23 @@ vec3 background_behind(ivec2 p, uint pixel) {
     return background_seen(d);
 }
 
+// The G-buffer's visible surface at path r's pixel, seen from the camera, the ray cone grown to it. False where the
+// pixel has no surface; `background` is then what it shows.
+bool gbuffer_vertex(inout ChainRay r, out Surface s, out vec3 v, out vec3 background) {
+    ivec2 p = ivec2(r.pixel % pc.width, r.pixel / pc.width);
+    uvec4 ids = read_gbuffer_surface_ids(p);
+    background = vec3(0.0);
+    if (ids.x == 0u) {
+        background = background_behind(p, r.pixel);
+        return false;
+    }
+    vec3 position = read_gbuffer_position(p);
+    v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
+    r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
+    s = gbuffer_surface(p, ids, v);
+    return true;
+}
+
 // A path of pixel `pixel` before its visible vertex: in the reference mode its camera ray through its own sub-pixel
 // point and lens point.
 ChainRay start_path(uvec2 pixel, uint lane) {
@@ -200,16 +217,11 @@ vec4 trace_path(inout ChainRay r, out bool goes_on, inout uint shadow_rays, inou
         vec3 v;
         float t_hit = 0.0;
         if (depth == 0u && PRIMARY_RAYS == 0u) {
-            ivec2 p = ivec2(r.pixel % pc.width, r.pixel / pc.width);
-            uvec4 ids = read_gbuffer_surface_ids(p);
-            if (ids.x == 0u) {
-                radiance = background_behind(p, r.pixel);
+            vec3 background;
+            if (!gbuffer_vertex(r, s, v, background)) {
+                radiance = background;
                 break;
             }
-            vec3 position = read_gbuffer_position(p);
-            v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
-            r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
-            s = gbuffer_surface(p, ids, v);
         } else {
             if (depth > 0u) secondary_rays++;
             log_ray(0u, r.origin, r.t_range.x, r.dir, r.t_range.y);
