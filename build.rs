@@ -1,7 +1,8 @@
 //! Compiles every shader under `shaders/` (not `shaders/include/`) to SPIR-V with shaderc (glslang), target
 //! Vulkan 1.3, and writes `$OUT_DIR/shaders.rs`, which `src/shaders.rs` includes: one `&[u8]` per shader plus a
 //! table of all of them. A GLSL error fails the build as `path:line: message`. It also bakes the specular albedo
-//! table (`src/math/ggx.rs`) into `$OUT_DIR/specular_albedo_table.rs`.
+//! table (`src/math/ggx.rs`) and the sheen albedo table (`src/math/sheen.rs`) into
+//! `$OUT_DIR/specular_albedo_table.rs`.
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -9,6 +10,11 @@ use std::path::{Path, PathBuf};
 #[allow(dead_code)]
 #[path = "src/math/ggx.rs"]
 mod ggx;
+
+/// The sheen lobe's math, for its albedo table, likewise.
+#[allow(dead_code)]
+#[path = "src/math/sheen.rs"]
+mod sheen;
 
 fn main() {
     #[cfg(feature = "system-shaderc")]
@@ -103,12 +109,13 @@ fn main() {
     write_check_files(&root, &out_dir.join("check_files.rs"));
 }
 
-/// The specular lobe's directional albedo table (`ggx::specular_albedo_table_values`) as a Rust array of exact
-/// bits, at the size shared_constants.glsl gives. Integrating it takes seconds in this unoptimised script, so it
-/// is skipped when the file already holds the table of this very `ggx.rs` and size (a shader edit reruns the
-/// script).
+/// The specular lobe's directional albedo table (`ggx::specular_albedo_table_values`) and the sheen lobe's
+/// (`sheen::sheen_albedo_table_values`) as Rust arrays of exact bits, at the size shared_constants.glsl gives.
+/// Integrating them takes seconds in this unoptimised script, so it is skipped when the file already holds the
+/// tables of this very `ggx.rs`, `sheen.rs` and size (a shader edit reruns the script).
 fn write_specular_albedo_table(root: &Path, constants: &[(String, String)], out: &Path) {
     println!("cargo:rerun-if-changed=src/math/ggx.rs");
+    println!("cargo:rerun-if-changed=src/math/sheen.rs");
     let steps = |name: &str| -> usize {
         constants
             .iter()
@@ -117,8 +124,13 @@ fn write_specular_albedo_table(root: &Path, constants: &[(String, String)], out:
             .unwrap_or_else(|| fail(&format!("shared_constants.glsl lacks `const uint {name} = …u;`")))
     };
     let (mu_steps, roughness_steps) = (steps("SPECULAR_ALBEDO_MU_STEPS"), steps("SPECULAR_ALBEDO_ROUGHNESS_STEPS"));
-    let source = root.join("src/math/ggx.rs");
-    let math = std::fs::read(&source).unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", source.display())));
+    let math: Vec<u8> = ["src/math/ggx.rs", "src/math/sheen.rs"]
+        .iter()
+        .flat_map(|file| {
+            let source = root.join(file);
+            std::fs::read(&source).unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", source.display())))
+        })
+        .collect();
     // What the table was made from: the size and a hash of the math's source.
     let made_from = {
         use std::hash::{Hash, Hasher};
@@ -135,6 +147,13 @@ fn write_specular_albedo_table(root: &Path, constants: &[(String, String)], out:
     let _ = writeln!(rust, "static SPECULAR_ALBEDO_TABLE: [[f32; 2]; {}] = [", table.len());
     for [e1, e5] in table {
         let _ = writeln!(rust, "    [f32::from_bits({:#010x}), f32::from_bits({:#010x})],", e1.to_bits(), e5.to_bits());
+    }
+    rust.push_str("];\n");
+    let sheen = sheen::sheen_albedo_table_values(mu_steps, roughness_steps);
+    rust.push_str("// sheen::sheen_albedo_table_values, E as f32 bits.\n");
+    let _ = writeln!(rust, "static SHEEN_ALBEDO_TABLE: [f32; {}] = [", sheen.len());
+    for e in sheen {
+        let _ = writeln!(rust, "    f32::from_bits({:#010x}),", e.to_bits());
     }
     rust.push_str("];\n");
     std::fs::write(out, rust).unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", out.display())));

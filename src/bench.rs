@@ -246,6 +246,7 @@ pub fn time_pipeline_creation(gpu: &Gpu, path: crate::render::accumulate::TraceP
         environment: false,
         chains: true,
         dispersion: false,
+        layers: false,
         launch: AccumulateLaunch::DeviceDefault,
         table_shift: 0,
     };

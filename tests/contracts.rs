@@ -78,7 +78,10 @@ fn material_offsets() -> Vec<(&'static str, usize)> {
         alpha_cutoff, alpha_mode, double_sided, base_color_texture, transmission_texture, normal_texture,
         emissive_texture, base_color_uv_rows, bump, metallic_roughness_texture, specular_texture,
         specular_color_texture, metallic_roughness_uv_rows, normal_uv_rows, emissive_uv_rows, transmission_uv_rows,
-        specular_color, specular_uv_rows, specular_color_uv_rows, unlit, absorption);
+        specular_color, specular_uv_rows, specular_color_uv_rows, unlit, absorption, clearcoat, sheen,
+        clearcoat_texture, clearcoat_roughness_texture, clearcoat_normal_texture, sheen_color_texture,
+        sheen_roughness_texture, pad, clearcoat_uv_rows, clearcoat_roughness_uv_rows, clearcoat_normal_uv_rows,
+        sheen_color_uv_rows, sheen_roughness_uv_rows);
     v
 }
 

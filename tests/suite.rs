@@ -22,6 +22,7 @@ mod fuzz_regressions;
 mod gbuffer;
 mod gltf_features;
 mod gltf_samples;
+mod layered_materials;
 mod layering;
 mod library_api;
 mod noise_gpu;

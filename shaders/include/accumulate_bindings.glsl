@@ -22,6 +22,9 @@ layout(constant_id = 4) const uint CHAINS = 1u;
 // 1: some transmissive material disperses (KHR_materials_dispersion, dispersion.glsl); 0: none, and the pipeline
 // holds none of its code (which also keeps every other scene's pixels the bits they were before it).
 layout(constant_id = 5) const uint DISPERSION = 0u;
+// 1: some material has a layer over its base (KHR_materials_clearcoat, _sheen; layers.glsl); 0: none, and the
+// pipeline holds none of the layers' code.
+layout(constant_id = 6) const uint LAYERS = 0u;
 // The flags every ray starts with, besides its own: with no alpha-tested geometry every ray is opaque and the
 // alpha test is never reached.
 const uint TRACE_FLAGS = ALPHA_TESTED != 0u ? 0u : gl_RayFlagsOpaqueEXT;
@@ -36,10 +39,12 @@ layout(set = 0, binding = ACCUMULATE_BINDING_MATERIALS, std430) readonly buffer 
 layout(set = 0, binding = ACCUMULATE_BINDING_LIGHTS, std430) readonly buffer Lights { GpuLight lights[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_PRIMITIVES, std430) readonly buffer Primitives { GpuPrimitiveRecord primitives[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_TEXTURES) uniform sampler2D textures[];
-// The GGX lobe's directional albedo terms (E1, E5) per (roughness, view cosine), roughness-major (math::brdf).
-layout(set = 0, binding = ACCUMULATE_BINDING_SPECULAR_ALBEDO, std430) readonly buffer SpecularAlbedo {
-    vec2 specular_albedo[];
+// Directional albedo tables per (roughness, view cosine), roughness-major (math::brdf::albedo_tables): the GGX
+// lobe's terms (E1, E5), then from SHEEN_ALBEDO_TABLE on the sheen lobe's (E, 0).
+layout(set = 0, binding = ACCUMULATE_BINDING_SPECULAR_ALBEDO, std430) readonly buffer AlbedoTables {
+    vec2 albedo_tables[];
 };
+const uint SHEEN_ALBEDO_TABLE = SPECULAR_ALBEDO_MU_STEPS * SPECULAR_ALBEDO_ROUGHNESS_STEPS;
 layout(set = 0, binding = ACCUMULATE_BINDING_COUNTERS, std430) buffer Counters { uint counters[]; };
 layout(set = 0, binding = ACCUMULATE_BINDING_CAMERAS, std430) readonly buffer Cameras { GpuCamera cameras[]; };
 // The environment (environment.glsl; src/render/environment.rs): a header, then texels and the sampling CDFs.

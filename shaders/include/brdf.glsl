@@ -17,6 +17,17 @@ struct Shading {
     // What the specular layer leaves to the diffuse base seen from the viewer: 1 − the layer's directional
     // albedo there (albedo scaling; set where the view is known, surface.glsl's face_viewer; 1 until then).
     float diffuse_share;
+    // The layers over the base (layers.glsl; docs/architecture.md, "Layered materials"), read only by the
+    // accumulation pass and only where a scene has them (its LAYERS constant).
+    float clearcoat;            // KHR_materials_clearcoat factor × texture (0: no coat)
+    float clearcoat_roughness;  // factor × texture
+    vec3 clearcoat_normal;      // the coat's shading normal: the vertex normal, or the coat's own normal texture
+    vec3 sheen_color;           // KHR_materials_sheen colour × texture (black: no sheen)
+    float sheen_roughness;      // factor × texture
+    // What the coat leaves to the sheen and base under it, and the sheen to the base, seen from the viewer:
+    // 1 − each layer's directional albedo there (face_viewer; 1 until then).
+    float coat_share;
+    float sheen_share;
 };
 
 float luminance(vec3 c) {

@@ -3,6 +3,7 @@
 #ifndef DIRECT_LIGHT_GLSL
 #define DIRECT_LIGHT_GLSL
 #include "path_vertex.glsl"
+#include "layers.glsl"
 
 // The light whose share of the power CDF (emission.w, the running sum) holds u.x, and u.x rescaled to [0, 1)
 // within that share: the pick and the point on the light come from one 2D sample, so its stratification carries
@@ -55,8 +56,8 @@ const float DIFFUSE_BOUNCE = -1.0;
 
 // The probability that a path goes on by the diffuse lobe: 0 without diffuse interreflection, where light
 // sampling takes that lobe whole, except when BSDF sampling alone estimates direct light.
-float diffuse_probability(Shading m) {
-    return pc.indirect != 0u || pc.direct_light == DIRECT_BSDF_SAMPLING ? diffuse_choice(m) : 0.0;
+float diffuse_probability(Shading m, vec3 v) {
+    return pc.indirect != 0u || pc.direct_light == DIRECT_BSDF_SAMPLING ? layered_diffuse_choice(m, v) : 0.0;
 }
 
 // Whether a path may go on from vertex `depth` (--bounces): the MIS weights of that vertex's light sample
@@ -66,8 +67,8 @@ bool room_to_bounce(uint depth) {
 }
 
 // The probability that it goes on by the specular lobe: what scales the gloss rays' density for MIS.
-float specular_share(Shading m) {
-    return 1.0 - diffuse_probability(m);
+float specular_share(Shading m, vec3 v) {
+    return 1.0 - diffuse_probability(m, v);
 }
 
 // One light sample: the light picked by power, a point on it, its shadow ray. With MIS the diffuse lobe takes it
@@ -105,9 +106,9 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, bool bsdf_follows, in
     if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
     vec3 diffuse;
     vec3 specular;
-    brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);
+    layered_brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);
     if (!ls.delta && pc.direct_light == DIRECT_MIS && bsdf_follows) {
-        specular *= power_heuristic(p * ls.pdf, specular_share(s.m) * specular_pdf(s.m, s.normal, v, ls.dir));
+        specular *= power_heuristic(p * ls.pdf, specular_share(s.m, v) * layered_specular_pdf(s.m, s.normal, v, ls.dir));
     }
     vec3 f = diffuse + specular;
     if (f == vec3(0.0)) return vec3(0.0);

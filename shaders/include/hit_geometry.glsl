@@ -66,9 +66,11 @@ float footprint_lod(float cone_width, vec3 world_edges, vec3 dir, float uv_area2
 
 // Whether any texture the hit shading reads takes TEXCOORD_1 (normal textures read TEXCOORD_0).
 bool any_texture_reads_uv1(GpuMaterial m) {
+    bool layers = LAYERS != 0u && (reads_uv1(m.clearcoat_uv_rows) || reads_uv1(m.clearcoat_roughness_uv_rows) ||
+                                   reads_uv1(m.sheen_color_uv_rows) || reads_uv1(m.sheen_roughness_uv_rows));
     return reads_uv1(m.base_color_uv_rows) || reads_uv1(m.metallic_roughness_uv_rows) ||
            reads_uv1(m.emissive_uv_rows) || reads_uv1(m.transmission_uv_rows) || reads_uv1(m.specular_uv_rows) ||
-           reads_uv1(m.specular_color_uv_rows);
+           reads_uv1(m.specular_color_uv_rows) || layers;
 }
 
 vec4 hit_color(TriangleHit h) {

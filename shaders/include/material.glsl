@@ -1,5 +1,5 @@
 // The one material evaluation: what a glTF metallic-roughness material (glTF 2.0 §3.9, with
-// KHR_materials_transmission, _ior, _specular, _unlit and KHR_texture_transform) and its Blinn bump (Blinn 1978) make of a
+// KHR_materials_transmission, _ior, _specular, _unlit, _clearcoat, _sheen and KHR_texture_transform) and its Blinn bump (Blinn 1978) make of a
 // surface point. The G-buffer pass (gbuffer.frag) and every ray hit (path_tracer.glsl's hit_surface) call it, so a
 // surface looks the same seen directly, in a mirror or through glass.
 //
@@ -22,6 +22,51 @@ bool alpha_test_passes(GpuMaterial m, float alpha, float u) {
     return m.alpha_mode == ALPHA_MASK ? alpha >= m.alpha_cutoff : alpha > u;
 }
 
+// KHR_materials_clearcoat's and KHR_materials_sheen's parameters at a point (factors × textures, glTF's channels:
+// the coat's factor in R and roughness in G, the sheen's colour in RGB and roughness in A), where the material has
+// a layer; none elsewhere. The coat's normal is `n_vertex`, the interpolated vertex normal (the base's normal texture
+// and bump lie under the coat), tilted by the coat's own normal texture where it has one.
+void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu, vec3 dpdv, vec2 footprint_lod,
+                     inout Shading s) {
+    s.clearcoat = 0.0;
+    s.clearcoat_roughness = 0.0;
+    s.clearcoat_normal = n_vertex;
+    s.sheen_color = vec3(0.0);
+    s.sheen_roughness = 0.0;
+    s.coat_share = 1.0;
+    s.sheen_share = 1.0;
+    if (m.clearcoat.w == 0.0) return;
+    s.clearcoat = m.clearcoat.x;
+    s.clearcoat_roughness = m.clearcoat.y;
+    if (m.clearcoat_texture >= 0) {
+        s.clearcoat *= material_texture(m.clearcoat_texture, texture_uv(m.clearcoat_uv_rows, uv0, uv1),
+                                        m.clearcoat_uv_rows, footprint_lod).r;
+    }
+    if (m.clearcoat_roughness_texture >= 0) {
+        s.clearcoat_roughness *= material_texture(m.clearcoat_roughness_texture,
+                                                  texture_uv(m.clearcoat_roughness_uv_rows, uv0, uv1),
+                                                  m.clearcoat_roughness_uv_rows, footprint_lod).g;
+    }
+    if (m.clearcoat_normal_texture >= 0) {
+        vec3 texel = material_texture(m.clearcoat_normal_texture, transform_uv(m.clearcoat_normal_uv_rows, uv0),
+                                      m.clearcoat_normal_uv_rows, footprint_lod).xyz;
+        vec3 map_dpdu = dpdu;
+        vec3 map_dpdv = dpdv;
+        transform_derivatives(m.clearcoat_normal_uv_rows, map_dpdu, map_dpdv);
+        s.clearcoat_normal = normalize(normal_from_texture(n_vertex, map_dpdu, map_dpdv, texel, m.clearcoat.z));
+    }
+    s.sheen_color = m.sheen.rgb;
+    s.sheen_roughness = m.sheen.a;
+    if (m.sheen_color_texture >= 0) {
+        s.sheen_color *= material_texture(m.sheen_color_texture, texture_uv(m.sheen_color_uv_rows, uv0, uv1),
+                                          m.sheen_color_uv_rows, footprint_lod).rgb;
+    }
+    if (m.sheen_roughness_texture >= 0) {
+        s.sheen_roughness *= material_texture(m.sheen_roughness_texture, texture_uv(m.sheen_roughness_uv_rows, uv0, uv1),
+                                              m.sheen_roughness_uv_rows, footprint_lod).a;
+    }
+}
+
 // A material at one surface point.
 struct MaterialPoint {
     vec4 base;                 // base colour × vertex colour × texture; a: alpha
@@ -40,6 +85,7 @@ struct MaterialPoint {
 MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2 uv1, vec3 n, vec3 dpdu, vec3 dpdv,
                                 vec2 footprint_lod, const bool with_height) {
     MaterialPoint p;
+    vec3 n_vertex = n;
     p.base = m.base_color * vertex_color;
     if (m.base_color_texture >= 0) {
         p.base *= material_texture(m.base_color_texture, texture_uv(m.base_color_uv_rows, uv0, uv1),
@@ -103,6 +149,7 @@ MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2
     }
     p.shading.specular_color = m.specular_color.rgb * p.specular_color_texel;
     p.shading.diffuse_share = 1.0;
+    evaluate_layers(m, uv0, uv1, normalize(n_vertex), dpdu, dpdv, footprint_lod, p.shading);
     if (m.unlit != 0) {
         // KHR_materials_unlit: the base colour is what the surface shows, as radiance; it reflects and transmits
         // nothing (specular 0 is F0 = F90 = 0, brdf.glsl). It is no light: light sampling never picks it (its

@@ -69,14 +69,14 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
     vec3 weight;
     float u_lobe = sample1(r.pixel, dim + VERTEX_LOBE_CHOICE);
-    float p_diffuse = diffuse_probability(s.m);
+    float p_diffuse = diffuse_probability(s.m, v);
     if (u_lobe < p_diffuse) {
         r.dir = sample_cosine(s.normal, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION));
         float nl = dot(s.normal, r.dir);
         if (nl <= 0.0 || dot(s.geometric, r.dir) <= 0.0) return false;
         vec3 diffuse;
         vec3 specular;
-        brdf_cos(s.m, s.normal, v, r.dir, diffuse, specular);
+        layered_brdf_cos(s.m, s.normal, v, r.dir, diffuse, specular);
         // f·cos / (p_diffuse · cos/π).
         weight = diffuse * (PI / (nl * p_diffuse));
         r.pdf = DIFFUSE_BOUNCE;
@@ -84,7 +84,7 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     } else {
         // The rest of u_lobe chooses between reflection and refraction.
         u_lobe = (u_lobe - p_diffuse) / (1.0 - p_diffuse);
-        if (!sample_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION), u_lobe, r.dir, weight, r.pdf)) {
+        if (!sample_layered_specular(s.m, s.normal, v, s.inside, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION), u_lobe, r.dir, weight, r.pdf)) {
             return false;
         }
         // A reflection below the face, as light sampling sees it (direct_light), reflects nothing.
@@ -157,8 +157,11 @@ vec3 background_behind(ivec2 p, uint pixel) {
 }
 
 // The G-buffer's visible surface at path r's pixel, seen from the camera, the ray cone grown to it. False where the
-// pixel has no surface; `background` is then what it shows.
-bool gbuffer_vertex(inout ChainRay r, out Surface s, out vec3 v, out vec3 background) {
+// pixel has no surface; `background` is then what it shows. `refind`: the surface's material has layers, which the
+// G-buffer has no room for (docs/architecture.md, "Layered materials"), so r becomes a short ray along the view
+// direction through the stored position, either side of it by the margin offset_origin uses, to meet the surface
+// again and evaluate it at that hit; the G-buffer's own (unlayered) surface stands in if the ray misses.
+bool gbuffer_vertex(inout ChainRay r, out Surface s, out vec3 v, out vec3 background, out bool refind) {
     ivec2 p = ivec2(r.pixel % pc.width, r.pixel / pc.width);
     uvec4 ids = read_gbuffer_surface_ids(p);
     background = vec3(0.0);
@@ -170,6 +173,13 @@ bool gbuffer_vertex(inout ChainRay r, out Surface s, out vec3 v, out vec3 backgr
     v = pc.eye.w != 0.0 ? -pc.forward.xyz : normalize(pc.eye.xyz - position);
     r.cone.x += r.cone.y * distance(pc.eye.xyz, position);
     s = gbuffer_surface(p, ids, v);
+    refind = LAYERS != 0u && materials[ids.y].clearcoat.w != 0.0;
+    if (refind) {
+        float margin = 1e-4 * (1.0 + max(max(abs(position.x), abs(position.y)), abs(position.z)));
+        r.origin = position + v * margin;
+        r.dir = -v;
+        r.t_range = vec2(0.0, 2.0 * margin);
+    }
     return true;
 }
 
@@ -216,16 +226,20 @@ vec4 trace_path(inout ChainRay r, out bool goes_on, inout uint shadow_rays, inou
         Surface s;
         vec3 v;
         float t_hit = 0.0;
-        if (depth == 0u && PRIMARY_RAYS == 0u) {
+        bool from_gbuffer = depth == 0u && PRIMARY_RAYS == 0u;
+        bool refind = false;
+        if (from_gbuffer) {
             vec3 background;
-            if (!gbuffer_vertex(r, s, v, background)) {
+            if (!gbuffer_vertex(r, s, v, background, refind)) {
                 radiance = background;
                 break;
             }
-        } else {
+        }
+        if (!from_gbuffer || refind) {
             if (depth > 0u) secondary_rays++;
             log_ray(0u, r.origin, r.t_range.x, r.dir, r.t_range.y);
-            Hit h = trace_closest(r.origin, r.dir, r.t_range.x, r.t_range.y, r.cone);
+            // The G-buffer's surface met again: whatever the raster pass's alpha test kept, with no test of its own.
+            Hit h = trace_closest(r.origin, r.dir, r.t_range.x, r.t_range.y, r.cone, refind ? gl_RayFlagsOpaqueEXT : 0u);
             bool hit = h.record != MISS;
             t_hit = hit ? h.t : 1e30;
             if (depth > 0u) {
@@ -236,16 +250,20 @@ vec4 trace_path(inout ChainRay r, out bool goes_on, inout uint shadow_rays, inou
                     break;
                 }
             }
-            if (!hit) {
+            if (!hit && !refind) {
                 radiance += depth == 0u ? background_seen(r.dir) : r.throughput * escaped(r);
                 break;
             }
-            v = -r.dir;
-            r.cone.x += r.cone.y * t_hit;
-            s = hit_surface(h, v, r.cone.x, depth == 0u);
-            // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over
-            // the segment (KHR_materials_volume), for everything it finds here and beyond.
-            if (depth > 0u && s.inside) r.throughput *= exp(-s.absorption * t_hit);
+            if (hit) {
+                if (!refind) {
+                    v = -r.dir;
+                    r.cone.x += r.cone.y * t_hit;
+                }
+                s = hit_surface(h, v, r.cone.x, depth == 0u);
+                // Arriving from inside, the ray crossed the medium this surface bounds: Beer–Lambert absorption over
+                // the segment (KHR_materials_volume), for everything it finds here and beyond.
+                if (depth > 0u && s.inside) r.throughput *= exp(-s.absorption * t_hit);
+            }
         }
         uint dim = DIM_FIRST_VERTEX + DIMS_PER_VERTEX * depth;
         // A dispersive visible vertex weighs its own light and its chain by the channel it chose, after Russian

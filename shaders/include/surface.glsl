@@ -3,6 +3,7 @@
 #ifndef SURFACE_GLSL
 #define SURFACE_GLSL
 #include "path_vertex.glsl"
+#include "layers.glsl"
 
 // What a pixel shows where no surface is, along its primary ray's direction: the background colour, the
 // environment, or nothing (a transparent background: alpha 0 and no radiance).
@@ -12,21 +13,6 @@ vec3 background_seen(vec3 dir) {
     return pc.background.rgb;
 }
 
-// The specular lobe's directional albedo terms (E1, E5) at view cosine `nv` and `roughness`: the table
-// (math::brdf) read bilinearly, clamped at its edges, as math::brdf::lookup reads it.
-vec2 specular_albedo_terms(float nv, float roughness) {
-    float x = clamp(clamp(nv, 0.0, 1.0) * float(SPECULAR_ALBEDO_MU_STEPS) - 0.5, 0.0, float(SPECULAR_ALBEDO_MU_STEPS - 1u));
-    float y = clamp(roughness, 0.0, 1.0) * float(SPECULAR_ALBEDO_ROUGHNESS_STEPS - 1u);
-    uint x0 = uint(floor(x));
-    uint y0 = uint(floor(y));
-    uint x1 = min(x0 + 1u, SPECULAR_ALBEDO_MU_STEPS - 1u);
-    uint y1 = min(y0 + 1u, SPECULAR_ALBEDO_ROUGHNESS_STEPS - 1u);
-    float fx = x - float(x0);
-    float fy = y - float(y0);
-    vec2 top = mix(specular_albedo[y0 * SPECULAR_ALBEDO_MU_STEPS + x0], specular_albedo[y0 * SPECULAR_ALBEDO_MU_STEPS + x1], fx);
-    vec2 bottom = mix(specular_albedo[y1 * SPECULAR_ALBEDO_MU_STEPS + x0], specular_albedo[y1 * SPECULAR_ALBEDO_MU_STEPS + x1], fx);
-    return mix(top, bottom, fy);
-}
 
 // Turns the normals to the side the ray arrives from; arriving from behind means travelling inside. Then the
 // one rule of emission, for every way a surface is seen (the G-buffer's visible surface, primary rays, gloss,
@@ -39,8 +25,10 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
     if (s.inside) {
         s.normal = -s.normal;
         s.geometric = -s.geometric;
+        s.m.clearcoat_normal = -s.m.clearcoat_normal;
     }
     s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
+    if (LAYERS != 0u) set_layer_shares(s.m, s.normal, v);
     s.absorption = m.absorption.rgb;
     s.dispersion = m.absorption.w;
     bool emits = m.double_sided != 0 || !s.inside;
@@ -66,6 +54,12 @@ Surface gbuffer_surface(ivec2 p, uvec4 ids, vec3 v) {
     s.m.ior = materials[t.material].ior;
     s.m.specular = t.specular;
     s.m.specular_color = materials[t.material].specular_color.rgb * t.specular_color_texel;
+    // No layers: a layered material's visible surface is evaluated at a ray hit instead (gbuffer_vertex).
+    s.m.clearcoat = 0.0;
+    s.m.clearcoat_roughness = 0.0;
+    s.m.clearcoat_normal = s.normal;
+    s.m.sheen_color = vec3(0.0);
+    s.m.sheen_roughness = 0.0;
     face_viewer(s, v, materials[t.material]);
     return s;
 }
@@ -104,7 +98,7 @@ Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
     vec2 lod = vec2(footprint_lod(cone_width, ng, v, uv_area.z), footprint_lod(cone_width, ng, v, uv1_area.z));
     vec3 dpdu = vec3(0.0);
     vec3 dpdv = vec3(0.0);
-    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE) {
+    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE || (LAYERS != 0u && m.clearcoat_normal_texture >= 0)) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
         Vec3Array dpdus = Vec3Array(h.r.dpdu);
         Vec3Array dpdvs = Vec3Array(h.r.dpdv);
@@ -113,13 +107,14 @@ Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
     }
     MaterialPoint mp = evaluate_material(m, hit_color(h), uv, uv1_area.xy, s.normal, dpdu, dpdv, lod, false);
     s.normal = mp.normal;
+    s.emission = mp.emission;
+    s.m = mp.shading;
     // The raster pass turns double-sided faces seen from behind to the viewer: the same surface.
     if (visible && m.double_sided != 0 && dot(s.geometric, v) < 0.0) {
         s.normal = -s.normal;
         s.geometric = -s.geometric;
+        s.m.clearcoat_normal = -s.m.clearcoat_normal;
     }
-    s.emission = mp.emission;
-    s.m = mp.shading;
     face_viewer(s, v, m);
     return s;
 }

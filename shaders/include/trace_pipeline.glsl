@@ -8,9 +8,9 @@
 
 layout(location = 0) rayPayloadEXT TracePayload payload;
 
-Hit trace_closest(vec3 origin, vec3 dir, float t_min, float t_max, vec2 cone) {
+Hit trace_closest(vec3 origin, vec3 dir, float t_min, float t_max, vec2 cone, uint flags) {
     payload.cone = cone;
-    traceRayEXT(tlas, TRACE_FLAGS, 0xFF, 0, 0, 0, origin, t_min, dir, t_max, 0);
+    traceRayEXT(tlas, TRACE_FLAGS | flags, 0xFF, 0, 0, 0, origin, t_min, dir, t_max, 0);
     Hit h;
     h.record = payload.record;
     h.primitive = payload.primitive;

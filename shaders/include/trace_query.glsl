@@ -19,9 +19,9 @@ void run_query(rayQueryEXT q, vec2 cone) {
     }
 }
 
-Hit trace_closest(vec3 origin, vec3 dir, float t_min, float t_max, vec2 cone) {
+Hit trace_closest(vec3 origin, vec3 dir, float t_min, float t_max, vec2 cone, uint flags) {
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, TRACE_FLAGS, 0xFF, origin, t_min, dir, t_max);
+    rayQueryInitializeEXT(q, tlas, TRACE_FLAGS | flags, 0xFF, origin, t_min, dir, t_max);
     run_query(q, cone);
     Hit h;
     h.record = MISS;

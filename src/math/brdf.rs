@@ -19,15 +19,38 @@ pub fn specular_albedo_table() -> &'static [[f32; 2]] {
 
 include!(concat!(env!("OUT_DIR"), "/specular_albedo_table.rs"));
 
-/// The table read as the shader reads it: bilinear in (view cosine, roughness), clamped at the edges.
+/// The white sheen lobe's directional albedo E for every (roughness, view cosine) of the same grid, roughness-major
+/// (`sheen::sheen_albedo_table_values`, baked by build.rs): what the layers under a sheen are scaled by.
+pub fn sheen_albedo_table() -> &'static [f32] {
+    &SHEEN_ALBEDO_TABLE
+}
+
+/// What the accumulation pass's albedo buffer holds (`albedo_tables` in accumulate_bindings.glsl): the specular
+/// table's (E₁, E₅), then the sheen table's (E, 0), each on the same grid.
+pub fn albedo_tables() -> Vec<[f32; 2]> {
+    specular_albedo_table().iter().copied().chain(sheen_albedo_table().iter().map(|&e| [e, 0.0])).collect()
+}
+
+/// The specular table read as the shader reads it: bilinear in (view cosine, roughness), clamped at the edges.
 pub fn lookup(mu: f32, roughness: f32) -> [f32; 2] {
     let table = specular_albedo_table();
+    lookup_in(|i| table[i], mu, roughness)
+}
+
+/// The sheen table read as the shader reads it.
+pub fn sheen_lookup(mu: f32, roughness: f32) -> f32 {
+    let table = sheen_albedo_table();
+    lookup_in(|i| [table[i]], mu, roughness)[0]
+}
+
+/// A table whose entry `i` is `at(i)`, read bilinearly.
+fn lookup_in<const N: usize>(at: impl Fn(usize) -> [f32; N], mu: f32, roughness: f32) -> [f32; N] {
     let x = (mu.clamp(0.0, 1.0) * MU_STEPS as f32 - 0.5).clamp(0.0, (MU_STEPS - 1) as f32);
     let y = roughness.clamp(0.0, 1.0) * (ROUGHNESS_STEPS - 1) as f32;
     let (x0, y0) = (x.floor() as usize, y.floor() as usize);
     let (x1, y1) = ((x0 + 1).min(MU_STEPS - 1), (y0 + 1).min(ROUGHNESS_STEPS - 1));
     let (fx, fy) = (x - x0 as f32, y - y0 as f32);
-    let at = |x: usize, y: usize| table[y * MU_STEPS + x];
+    let at = |x: usize, y: usize| at(y * MU_STEPS + x);
     std::array::from_fn(|c| {
         let top = at(x0, y0)[c] * (1.0 - fx) + at(x1, y0)[c] * fx;
         let bottom = at(x0, y1)[c] * (1.0 - fx) + at(x1, y1)[c] * fx;
@@ -81,6 +104,25 @@ mod tests {
         let integrated = super::super::ggx::specular_albedo_table_values(MU_STEPS, ROUGHNESS_STEPS);
         let bits = |t: &[[f32; 2]]| t.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
         assert_eq!(bits(specular_albedo_table()), bits(&integrated));
+    }
+
+    /// The sheen table: baked as integrated, and its quadrature within 2e-3 of a grid eight times finer each way
+    /// (the Charlie lobe narrows towards the horizon as its roughness falls). The lobe reflects more than arrives
+    /// where a smooth sheen is seen at grazing (1.51 at view cosine 0.01, roughness 0.03), which is why the shader
+    /// divides it by max(1, E) (layers.glsl); seen head-on a smooth sheen reflects nothing.
+    #[test]
+    fn the_sheen_table_is_the_integrated_one_and_its_quadrature_converged() {
+        use super::super::sheen::{sheen_albedo, sheen_albedo_table_values};
+        let integrated = sheen_albedo_table_values(MU_STEPS, ROUGHNESS_STEPS);
+        let bits = |t: &[f32]| t.iter().map(|e| e.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(sheen_albedo_table()), bits(&integrated));
+        assert!(sheen_albedo_table().iter().all(|&e| (0.0..2.0).contains(&e)));
+        assert!(sheen_albedo(0.01, 0.03, 96, 48) > 1.5 && sheen_albedo(1.0, 0.03, 96, 48) < 1e-6);
+        for (mu, roughness) in [(1.0, 0.5), (0.5, 0.3), (0.1, 0.1), (0.05, 0.9), (0.8, 1.0), (0.05, 0.03), (0.01, 0.1)]
+        {
+            let (coarse, fine) = (sheen_albedo(mu, roughness, 96, 48), sheen_albedo(mu, roughness, 768, 384));
+            assert!((coarse - fine).abs() < 2e-3, "mu {mu}, roughness {roughness}: {coarse} against {fine}");
+        }
     }
 
     #[test]

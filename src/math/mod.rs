@@ -8,3 +8,4 @@ pub mod ggx;
 pub mod lens;
 pub mod noise;
 pub mod sampling;
+pub mod sheen;

@@ -105,8 +105,8 @@ pub struct AccumulatePass {
     tracer: Tracer,
     /// Nearest, clamped: the G-buffer is read texel by texel.
     gbuffer_sampler: Sampler,
-    /// The specular lobe's directional albedo table (math::brdf::specular_albedo_table): the same for every
-    /// frame, so the pass holds it.
+    /// The specular and sheen lobes' directional albedo tables (math::brdf::albedo_tables): the same for every
+    /// frame, so the pass holds them.
     specular_albedo: Buffer,
     launch: AccumulateLaunch,
     device: Arc<Device>,
@@ -169,6 +169,9 @@ pub struct AccumulateVariant {
     /// Some transmissive material disperses (`Scene::disperses`); without it the pipeline holds no dispersion
     /// code (DISPERSION).
     pub dispersion: bool,
+    /// Some material has a layer over its base (`Scene::layered`: a clear coat or a sheen); without it the
+    /// pipeline holds none of the layers' code (LAYERS).
+    pub layers: bool,
     pub launch: AccumulateLaunch,
     /// Bytes to move the shader binding table off its alignment (0 but in the test that breaks it on purpose).
     pub table_shift: u64,
@@ -183,10 +186,11 @@ impl AccumulatePass {
             environment,
             chains,
             dispersion,
+            layers,
             launch,
             table_shift,
         } = *variant;
-        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4, 5.
+        // constant_id 0, 1, 2 (the raygen shader's PIXEL_RUNS; unused by the compute shader), 3, 4, 5, 6.
         let flag = u32::from;
         let bindings = Self::bindings(device.texture_array_size())?;
         let push_constant_size = std::mem::size_of::<AccumulatePush>() as u32;
@@ -204,7 +208,15 @@ impl AccumulatePass {
                 ("accumulate.comp", shaders::ACCUMULATE_COMP),
                 &bindings,
                 push_constant_size,
-                &[flag(primary_rays), flag(alpha_tested), 0, flag(environment), flag(chains), flag(dispersion)],
+                &[
+                    flag(primary_rays),
+                    flag(alpha_tested),
+                    0,
+                    flag(environment),
+                    flag(chains),
+                    flag(dispersion),
+                    flag(layers),
+                ],
             )?),
             TracePath::Pipeline => {
                 let runs = if pixel_runs { ", pixel runs" } else { "" };
@@ -225,6 +237,7 @@ impl AccumulatePass {
                             flag(environment),
                             flag(chains),
                             flag(dispersion),
+                            flag(layers),
                         ],
                     },
                 )?;
@@ -246,8 +259,8 @@ impl AccumulatePass {
         )?;
         let specular_albedo = Buffer::with_data(
             device,
-            "specular albedo table",
-            crate::math::brdf::specular_albedo_table(),
+            "albedo tables",
+            &crate::math::brdf::albedo_tables(),
             vk::BufferUsageFlags::STORAGE_BUFFER,
             16,
         )?;

@@ -362,6 +362,7 @@ fn accumulate_variant(
         environment: scene.environment.is_some(),
         chains: options.keep_chain_code || super::accumulate::paths_go_on(max_depth, bsdf_sampling_alone),
         dispersion: scene.disperses(),
+        layers: scene.layered(),
         launch: options.accumulate_launch,
         table_shift: options.misalign_shader_binding_table,
     })

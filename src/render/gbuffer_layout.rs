@@ -185,6 +185,26 @@ pub struct GpuMaterial {
     /// rgb: the absorption coefficient σ per metre inside (KHR_materials_volume, `Material::absorption`); w: the
     /// dispersion, 20 / V_d (KHR_materials_dispersion; 0: none).
     pub absorption: Vec4,
+    /// KHR_materials_clearcoat: x the factor (0: no coat), y the roughness, z the coat normal texture's scale, w 1
+    /// where the material has a layer (`Material::is_layered`), else 0.
+    pub clearcoat: Vec4,
+    /// KHR_materials_sheen: rgb the colour (black: no sheen), a the roughness.
+    pub sheen: Vec4,
+    /// R scales the coat's factor; -1: none (and likewise below).
+    pub clearcoat_texture: i32,
+    /// G scales the coat's roughness.
+    pub clearcoat_roughness_texture: i32,
+    pub clearcoat_normal_texture: i32,
+    /// sRGB; RGB scales the sheen colour.
+    pub sheen_color_texture: i32,
+    /// A scales the sheen roughness.
+    pub sheen_roughness_texture: i32,
+    pub pad: [i32; 3],
+    pub clearcoat_uv_rows: [Vec4; 2],
+    pub clearcoat_roughness_uv_rows: [Vec4; 2],
+    pub clearcoat_normal_uv_rows: [Vec4; 2],
+    pub sheen_color_uv_rows: [Vec4; 2],
+    pub sheen_roughness_uv_rows: [Vec4; 2],
 }
 
 impl GpuMaterial {
@@ -202,6 +222,9 @@ impl GpuMaterial {
             let size = t.and_then(|t| texture_sizes.get(t.texture)).copied().unwrap_or((1, 1));
             [uv.row(0).extend(set), uv.row(1).extend(texel_lod_offset(size, uv))]
         };
+        // An unlit material has no layers (KHR_materials_unlit): they are left out with the rest of its shading.
+        let coat = m.clearcoat.filter(|_| !m.unlit).unwrap_or_default();
+        let sheen = m.sheen.filter(|_| !m.unlit).unwrap_or_default();
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (c::ALPHA_OPAQUE, 0.0),
             AlphaMode::Mask { cutoff } => (c::ALPHA_MASK, cutoff),
@@ -239,6 +262,27 @@ impl GpuMaterial {
             specular_uv_rows: uv_rows(m.specular_texture),
             specular_color_uv_rows: uv_rows(m.specular_color_texture),
             absorption: m.absorption().extend(m.dispersion),
+            clearcoat: Vec4::new(
+                coat.factor,
+                coat.roughness,
+                coat.normal_scale,
+                if m.is_layered() { 1.0 } else { 0.0 },
+            ),
+            sheen: sheen.color.extend(sheen.roughness),
+            clearcoat_texture: texture(coat.texture),
+            clearcoat_roughness_texture: texture(coat.roughness_texture),
+            clearcoat_normal_texture: texture(coat.normal_texture),
+            sheen_color_texture: texture(sheen.color_texture),
+            sheen_roughness_texture: texture(sheen.roughness_texture),
+            pad: [0; 3],
+            clearcoat_uv_rows: uv_rows(coat.texture),
+            clearcoat_roughness_uv_rows: uv_rows(coat.roughness_texture),
+            // The coat's normal texture, like the base's, reads TEXCOORD_0, whose derivatives are its tangent frame.
+            clearcoat_normal_uv_rows: uv_rows(
+                coat.normal_texture.map(|t| crate::scene::TextureRef { tex_coord: 0, ..t }),
+            ),
+            sheen_color_uv_rows: uv_rows(sheen.color_texture),
+            sheen_roughness_uv_rows: uv_rows(sheen.roughness_texture),
         }
     }
 }
@@ -286,7 +330,13 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, specular_color_texture), 152);
         assert_eq!(offset_of!(GpuMaterial, specular_color_uv_rows), 336);
         assert_eq!(offset_of!(GpuMaterial, absorption), 368);
-        assert_eq!(size_of::<GpuMaterial>(), 384);
+        assert_eq!(offset_of!(GpuMaterial, clearcoat), 384);
+        assert_eq!(offset_of!(GpuMaterial, sheen), 400);
+        assert_eq!(offset_of!(GpuMaterial, clearcoat_texture), 416);
+        assert_eq!(offset_of!(GpuMaterial, sheen_roughness_texture), 432);
+        assert_eq!(offset_of!(GpuMaterial, clearcoat_uv_rows), 448);
+        assert_eq!(offset_of!(GpuMaterial, sheen_roughness_uv_rows), 576);
+        assert_eq!(size_of::<GpuMaterial>(), 608);
     }
 
     #[test]

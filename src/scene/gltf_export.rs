@@ -163,6 +163,22 @@ fn material_json(m: &super::Material) -> Result<(Value, Vec<&'static str>)> {
         extensions.insert("KHR_materials_specular".into(), specular);
         used.push("KHR_materials_specular");
     }
+    if let Some(c) = m.clearcoat {
+        if c.texture.is_some() || c.roughness_texture.is_some() || c.normal_texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let coat = json!({"clearcoatFactor": c.factor, "clearcoatRoughnessFactor": c.roughness});
+        extensions.insert("KHR_materials_clearcoat".into(), coat);
+        used.push("KHR_materials_clearcoat");
+    }
+    if let Some(sheen) = m.sheen {
+        if sheen.color_texture.is_some() || sheen.roughness_texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let layer = json!({"sheenColorFactor": sheen.color.to_array(), "sheenRoughnessFactor": sheen.roughness});
+        extensions.insert("KHR_materials_sheen".into(), layer);
+        used.push("KHR_materials_sheen");
+    }
     if m.double_sided {
         material["doubleSided"] = json!(true);
     }

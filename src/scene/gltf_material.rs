@@ -1,6 +1,8 @@
 //! glTF materials, textures and images: the metallic-roughness material with the extensions strata reads
-//! (emissive strength, IOR, specular, transmission, unlit, texture transforms), samplers, and which image each
+//! (emissive strength, IOR, specular, transmission, unlit, texture transforms; the layers' own file,
+//! gltf_layers), samplers, and which image each
 //! texture reads (its KTX2 or WebP alternative, or its source; decoding is image_decode's).
+use super::gltf_layers;
 use super::gltf_uri::{read_uri, UriPolicy};
 use super::image_decode::decode_image;
 use super::material::{AlphaMode, Material, MipFilter, Sampler, Texture, TextureImage, TextureRef, UvTransform, Wrap};
@@ -166,6 +168,11 @@ pub(super) fn warn_about_unread_uv_sets(scene: &mut Scene) {
             ("transmission", m.transmission_texture, 1),
             ("specular", m.specular_texture, 1),
             ("specular colour", m.specular_color_texture, 1),
+            ("clearcoat", m.clearcoat.and_then(|c| c.texture), 1),
+            ("clearcoat roughness", m.clearcoat.and_then(|c| c.roughness_texture), 1),
+            ("clearcoat normal", m.clearcoat.and_then(|c| c.normal_texture), 0),
+            ("sheen colour", m.sheen.and_then(|s| s.color_texture), 1),
+            ("sheen roughness", m.sheen.and_then(|s| s.roughness_texture), 1),
         ];
         for (what, t, last_read) in uses {
             if let Some(t) = t.filter(|t| t.tex_coord > last_read) {
@@ -196,6 +203,11 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
     let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("material {}", m.index().unwrap_or(0)));
     let normal_transform = normal_texture_transform(&m, &name, root)?;
     let dispersion = dispersion(&m).with_context(|| format!("material \"{name}\": KHR_materials_dispersion"))?;
+    let texture_count = root.textures.len();
+    let clearcoat = gltf_layers::clearcoat(&m, texture_count)
+        .with_context(|| format!("material \"{name}\": {}", gltf_layers::CLEARCOAT))?;
+    let sheen = gltf_layers::sheen(&m, texture_count)
+        .with_context(|| format!("material \"{name}\": {}", gltf_layers::SHEEN))?;
     Ok(Material {
         name,
         base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -239,16 +251,20 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
             .unwrap_or(defaults.attenuation_color),
         attenuation_distance: m.volume().map(|v| v.attenuation_distance()).unwrap_or(defaults.attenuation_distance),
         dispersion,
+        clearcoat,
+        sheen,
         bump: None,
         unlit: m.unlit(),
     })
 }
 
-/// Base colour, emissive and specular colour textures hold sRGB-encoded colour; the rest hold linear data (glTF
-/// 2.0 §3.9, KHR_materials_specular).
+/// Base colour, emissive, specular colour and sheen colour textures hold sRGB-encoded colour; the rest hold linear
+/// data (glTF 2.0 §3.9, KHR_materials_specular, KHR_materials_sheen).
 pub(super) fn mark_color_textures(scene: &mut Scene) {
     for m in &scene.materials {
-        for t in [m.base_color_texture, m.emissive_texture, m.specular_color_texture].into_iter().flatten() {
+        let sheen_color = m.sheen.and_then(|s| s.color_texture);
+        for t in [m.base_color_texture, m.emissive_texture, m.specular_color_texture, sheen_color].into_iter().flatten()
+        {
             if let Some(texture) = scene.textures.get_mut(t.texture) {
                 texture.srgb = true;
             }

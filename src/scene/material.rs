@@ -158,6 +158,57 @@ impl Default for BumpMap {
     }
 }
 
+/// `KHR_materials_clearcoat`: a clear dielectric coat (IOR 1.5, F0 0.04) over the whole material, with its own
+/// roughness and normal (docs/architecture.md, "Layered materials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clearcoat {
+    /// How much of the surface the coat covers, 0 to 1.
+    pub factor: f32,
+    /// Its R channel scales `factor`.
+    pub texture: Option<TextureRef>,
+    pub roughness: f32,
+    /// Its G channel scales `roughness`.
+    pub roughness_texture: Option<TextureRef>,
+    /// The coat's own normal texture (tangent space, as the base's); without one the coat follows the
+    /// interpolated vertex normal, not the base's normal texture or bump.
+    pub normal_texture: Option<TextureRef>,
+    pub normal_scale: f32,
+}
+
+impl Default for Clearcoat {
+    /// The extension's defaults: no coat, smooth.
+    fn default() -> Self {
+        Self {
+            factor: 0.0,
+            texture: None,
+            roughness: 0.0,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        }
+    }
+}
+
+/// `KHR_materials_sheen`: a layer of fibres over the base (the "Charlie" sheen lobe, Estevez and Kulla 2017),
+/// coloured, with its own roughness (docs/architecture.md, "Layered materials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sheen {
+    /// Linear colour; black: no sheen.
+    pub color: Vec3,
+    /// sRGB; its RGB scales `color`.
+    pub color_texture: Option<TextureRef>,
+    pub roughness: f32,
+    /// Its alpha channel scales `roughness`.
+    pub roughness_texture: Option<TextureRef>,
+}
+
+impl Default for Sheen {
+    /// The extension's defaults: black (no sheen), smooth.
+    fn default() -> Self {
+        Self { color: Vec3::ZERO, color_texture: None, roughness: 0.0, roughness_texture: None }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -199,6 +250,10 @@ pub struct Material {
     /// two-term equation through `ior` at 587.56 nm; a transmissive surface refracts each colour channel by its
     /// own index (docs/architecture.md, "Dispersion").
     pub dispersion: f32,
+    /// `KHR_materials_clearcoat` (None: no coat).
+    pub clearcoat: Option<Clearcoat>,
+    /// `KHR_materials_sheen` (None: no sheen).
+    pub sheen: Option<Sheen>,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
     /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
@@ -234,6 +289,8 @@ impl Default for Material {
             attenuation_color: Vec3::ONE,
             attenuation_distance: f32::INFINITY,
             dispersion: 0.0,
+            clearcoat: None,
+            sheen: None,
             bump: None,
             unlit: false,
         }
@@ -243,6 +300,15 @@ impl Default for Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emissive.max_element() > 0.0
+    }
+
+    /// Whether the material has a layer over its base (a clear coat or a sheen) that shading must evaluate where
+    /// its surface is seen: the G-buffer has no room for the layers' parameters, so the accumulation pass evaluates
+    /// such a surface at a ray hit (docs/architecture.md, "Layered materials").
+    pub fn is_layered(&self) -> bool {
+        !self.unlit
+            && (self.clearcoat.is_some_and(|c| c.factor > 0.0)
+                || self.sheen.is_some_and(|s| s.color.max_element() > 0.0))
     }
 
     /// Whether the material refracts each colour channel by its own index: it transmits and disperses.

@@ -10,6 +10,7 @@ mod gltf_draco;
 pub mod gltf_export;
 pub mod gltf_import;
 mod gltf_instancing;
+mod gltf_layers;
 mod gltf_material;
 mod gltf_mesh;
 mod gltf_meshopt;
@@ -32,8 +33,8 @@ pub use camera::{Camera, Projection};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 pub use light::{Light, LightShape};
 pub use material::{
-    AlphaMode, BumpDerivative, BumpMap, Material, MipFilter, NoiseKind, Sampler, Texture, TextureImage, TextureRef,
-    UvTransform, Wrap,
+    AlphaMode, BumpDerivative, BumpMap, Clearcoat, Material, MipFilter, NoiseKind, Sampler, Sheen, Texture,
+    TextureImage, TextureRef, UvTransform, Wrap,
 };
 pub use motion::{NodeMotion, RigidMotion};
 use std::path::PathBuf;
@@ -199,6 +200,11 @@ impl Scene {
     /// Whether some material refracts each colour channel by its own index (KHR_materials_dispersion).
     pub fn disperses(&self) -> bool {
         self.materials.iter().any(|m| m.disperses())
+    }
+
+    /// Whether some material has a layer over its base (a clear coat or a sheen: `Material::is_layered`).
+    pub fn layered(&self) -> bool {
+        self.materials.iter().any(Material::is_layered)
     }
 
     pub fn triangle_count(&self) -> usize {

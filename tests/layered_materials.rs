@@ -1,0 +1,301 @@
+//! The layered glTF materials, KHR_materials_clearcoat and KHR_materials_sheen, against what they must equal in a
+//! white furnace (a sphere in a uniform environment of radiance 1): over a black base each layer reflects its own
+//! directional albedo at each pixel's view cosine (the CPU twins' integrals, math::ggx and math::sheen), and over a
+//! white base the layers and the base together reflect exactly what arrives (albedo scaling); the G-buffer's visible
+//! surface, met again by a short ray, shades as the reference mode's primary rays do; light sampling, BSDF sampling
+//! and MIS converge to one picture of a coat under a quad light; and the glTF extensions load, with their textures,
+//! or fail naming the material, the extension and the property. Every GPU test runs under the validation layer.
+use crate::common;
+
+use common::scenes::*;
+use common::GpuTest;
+use glam::{Vec3, Vec4};
+use strata::render::frame::RenderedFrame;
+use strata::scene::environment::Environment;
+use strata::scene::settings::{RenderSettings, SamplerKind};
+use strata::scene::{Clearcoat, Material, Scene, Sheen};
+
+/// A unit sphere at the origin, seen from this far with a 30° vertical field of view (the grazing silhouette in view).
+const DISTANCE: f32 = 5.0;
+const FOV_DEGREES: f32 = 30.0;
+
+/// A base that reflects nothing (no diffuse, no specular), or everything diffusely (white Lambert, no specular).
+fn base(white: bool) -> Material {
+    let albedo = if white { 1.0 } else { 0.0 };
+    Material {
+        name: format!("{} base", if white { "white" } else { "black" }),
+        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
+        metallic: 0.0,
+        roughness: 0.5,
+        specular: 0.0,
+        ..Default::default()
+    }
+}
+
+fn furnace(material: Material) -> Scene {
+    let mut scene = Scene::default();
+    scene.materials.push(material);
+    strata::scene::library::add_sphere_in_view(&mut scene, 0, DISTANCE, FOV_DEGREES);
+    scene.environment = Some(Environment::uniform(Vec3::ONE));
+    scene
+}
+
+/// The view cosine n·v on the sphere along the ray through image point (x, y), in pixels (the camera at
+/// (0, 0, DISTANCE) looking down −z, as add_sphere_in_view places it); None off the sphere.
+fn view_cosine(x: f32, y: f32, size: u32) -> Option<f32> {
+    let t = (FOV_DEGREES.to_radians() / 2.0).tan();
+    let px = (2.0 * x / size as f32 - 1.0) * t;
+    let py = (1.0 - 2.0 * y / size as f32) * t;
+    let d = Vec3::new(px, py, -1.0).normalize();
+    let o = Vec3::new(0.0, 0.0, DISTANCE);
+    let b = o.dot(d);
+    let disc = b * b - (o.length_squared() - 1.0);
+    if disc <= 0.0 {
+        return None;
+    }
+    let hit = o + d * (-b - disc.sqrt());
+    Some(-hit.dot(d))
+}
+
+/// What a pixel wholly on the sphere shows of `f(μ)`: its mean over the pixel's box (the camera's jitter), on an
+/// 8 × 8 grid; None where part of the pixel misses the sphere. Near the silhouette one pixel spans view cosines 0.2
+/// apart, over which an albedo curves.
+fn pixel_mean(x: u32, y: u32, size: u32, f: &impl Fn(f32) -> f32) -> Option<(f32, f32)> {
+    let (mut sum, mut mu_sum) = (0.0, 0.0);
+    for k in 0..64 {
+        let (sx, sy) = (x as f32 + ((k % 8) as f32 + 0.5) / 8.0, y as f32 + ((k / 8) as f32 + 0.5) / 8.0);
+        let mu = view_cosine(sx, sy, size)?;
+        sum += f(mu);
+        mu_sum += mu;
+    }
+    Some((sum / 64.0, mu_sum / 64.0))
+}
+
+/// Over the fully covered pixels whose mean view cosine lies in [lo, hi): the mean of (pixel's largest channel −
+/// its mean of `expected(μ)`), its standard error, and the largest pixel.
+fn band_error(frame: &RenderedFrame, (lo, hi): (f32, f32), expected: impl Fn(f32) -> f32) -> (f64, f64, f64) {
+    let size = frame.linear.width;
+    let mut diffs = Vec::new();
+    let mut max = 0.0f64;
+    for (i, p) in frame.linear.pixels.iter().enumerate() {
+        let (x, y) = (i as u32 % size, i as u32 / size);
+        let Some((want, mu)) = pixel_mean(x, y, size, &expected) else { continue };
+        if p[3] < 1.0 || mu < lo || mu >= hi {
+            continue;
+        }
+        let value = p[0].max(p[1]).max(p[2]);
+        diffs.push(f64::from(value - want));
+        max = max.max(f64::from(value));
+    }
+    let n = diffs.len() as f64;
+    assert!(n > 30.0, "only {n} pixels with view cosines in [{lo}, {hi})");
+    let mean = diffs.iter().sum::<f64>() / n;
+    let sd = (diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (mean, sd / n.sqrt(), max)
+}
+
+const BANDS: [(f32, f32); 3] = [(0.75, 1.0), (0.35, 0.75), (0.12, 0.35)];
+
+fn furnace_settings(size: u32, spp: u32) -> RenderSettings {
+    RenderSettings { indirect: true, bounces: 8, ..settings(size, size, spp, SamplerKind::MultiJittered) }
+}
+
+/// Checks every band of `frame` against `expected(μ)`: within four standard errors of its mean plus `slack` (the
+/// tables' bilinear interpolation and the sphere's facets), and no pixel above `max_pixel`.
+fn assert_bands(frame: &RenderedFrame, what: &str, slack: f64, max_pixel: f64, expected: impl Fn(f32) -> f32) {
+    for band in BANDS {
+        let (mean, se, max) = band_error(frame, band, &expected);
+        eprintln!("{what}, view cosines {band:?}: error {mean:+.4} ± {se:.4}, largest pixel {max:.3}");
+        assert!(mean.abs() <= 4.0 * se + slack, "{what}, view cosines {band:?}: off by {mean} ± {se}");
+        assert!(max <= max_pixel, "{what}, view cosines {band:?}: a pixel of {max}");
+    }
+}
+
+/// A clear coat over a black base reflects the coat's directional albedo F0·E₁ + (1 − F0)·E₅ (F0 0.04) at each
+/// view cosine, through gloss rays and light samples; over a white base the coat and the base under it reflect 1.
+#[test]
+fn a_clear_coat_reflects_its_albedo_over_black_and_with_a_white_base_exactly_what_arrives() {
+    let gpu = GpuTest::new();
+    let size = 64u32;
+    for roughness in [0.1f32, 0.5] {
+        let coat = Clearcoat { factor: 1.0, roughness, ..Default::default() };
+        let black = furnace(Material { clearcoat: Some(coat), ..base(false) });
+        let frame = render(gpu.device(), &black, &furnace_settings(size, 64));
+        let coat_albedo = |mu: f32| {
+            let [e1, e5] = strata::math::brdf::lookup(mu, roughness);
+            0.04 * e1 + 0.96 * e5
+        };
+        assert_bands(&frame, &format!("coat {roughness} over black"), 0.004, 1.0, coat_albedo);
+        let white = furnace(Material { clearcoat: Some(coat), ..base(true) });
+        let frame = render(gpu.device(), &white, &furnace_settings(size, 64));
+        assert_bands(&frame, &format!("coat {roughness} over white"), 0.004, 1.2, |_| 1.0);
+    }
+    gpu.finish().unwrap();
+}
+
+/// A white sheen over a black base reflects the Charlie lobe's directional albedo at each view cosine (math::sheen's
+/// quadrature, baked into the table that math::brdf::sheen_lookup reads; the GPU's picture of a black base does not
+/// read it, as E < 1 at these roughnesses); over a white base the sheen and the base reflect 1.
+#[test]
+fn a_sheen_reflects_its_albedo_over_black_and_with_a_white_base_exactly_what_arrives() {
+    let gpu = GpuTest::new();
+    let size = 64u32;
+    for roughness in [0.3f32, 0.8] {
+        let sheen = Sheen { color: Vec3::ONE, roughness, ..Default::default() };
+        let black = furnace(Material { sheen: Some(sheen), ..base(false) });
+        let frame = render(gpu.device(), &black, &furnace_settings(size, 64));
+        let sheen_albedo = |mu: f32| strata::math::brdf::sheen_lookup(mu, roughness).min(1.0);
+        assert_bands(&frame, &format!("sheen {roughness} over black"), 0.004, 1.0, sheen_albedo);
+        let white = furnace(Material { sheen: Some(sheen), ..base(true) });
+        let frame = render(gpu.device(), &white, &furnace_settings(size, 64));
+        assert_bands(&frame, &format!("sheen {roughness} over white"), 0.004, 1.2, |_| 1.0);
+    }
+    gpu.finish().unwrap();
+}
+
+/// A 2×1 texture, nearest and clamped: `left` and `right` texels (RGBA8; sRGB where a material reads it as colour).
+fn two_texel_texture(scene: &mut Scene, name: &str, left: [u8; 4], right: [u8; 4]) -> strata::scene::TextureRef {
+    use strata::scene::{Texture, TextureImage, Wrap};
+    scene.images.push(TextureImage { name: name.into(), width: 2, height: 1, rgba8: [left, right].concat() });
+    let image = scene.images.len() - 1;
+    scene.textures.push(Texture { name: name.into(), image, sampler: nearest_sampler(Wrap::ClampToEdge), srgb: false });
+    strata::scene::TextureRef { texture: scene.textures.len() - 1, tex_coord: 0, transform: None }
+}
+
+/// Per image column, the mean of each colour channel.
+fn column_means(frame: &RenderedFrame) -> Vec<Vec3> {
+    let (w, h) = (frame.linear.width, frame.linear.height);
+    (0..w).map(|x| (0..h).map(|y| Vec3::from_slice(&frame.linear.pixel(x, y)[..3])).sum::<Vec3>() / h as f32).collect()
+}
+
+/// The layers' textures scale their factors: a floor seen straight down in a white furnace, its left half's texels
+/// full and its right half's empty. A clear coat over black whose factor texture is 1 | 0 reflects the coat's albedo
+/// at normal view on one half and nothing on the other; a white sheen over black whose colour texture is red | blue
+/// (sRGB) reflects the sheen's albedo in red on one half and in blue on the other.
+#[test]
+fn layer_textures_scale_their_factors() {
+    use strata::scene::library::place;
+    let gpu = GpuTest::new();
+    let size = 32u32;
+    for layer in ["clearcoat", "sheen"] {
+        let mut scene = Scene::default();
+        let mut material = base(false);
+        let (expected_left, expected_right) = if layer == "clearcoat" {
+            let texture = two_texel_texture(&mut scene, "coat", [255, 0, 0, 255], [0, 0, 0, 255]);
+            material.clearcoat =
+                Some(Clearcoat { factor: 1.0, roughness: 0.2, texture: Some(texture), ..Default::default() });
+            let [e1, e5] = strata::math::brdf::lookup(1.0, 0.2);
+            (Vec3::splat(0.04 * e1 + 0.96 * e5), Vec3::ZERO)
+        } else {
+            let texture = two_texel_texture(&mut scene, "sheen colour", [255, 0, 0, 255], [0, 0, 255, 255]);
+            scene.textures[texture.texture].srgb = true;
+            material.sheen =
+                Some(Sheen { color: Vec3::ONE, roughness: 1.0, color_texture: Some(texture), ..Default::default() });
+            let e = strata::math::brdf::sheen_lookup(1.0, 1.0);
+            (Vec3::new(e, 0.0, 0.0), Vec3::new(0.0, 0.0, e))
+        };
+        scene.materials.push(material);
+        let (floor, at) = plane_at(glam::Vec2::splat(2.0), Vec3::ZERO, false, 0);
+        place(&mut scene, "floor", floor, at);
+        scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, 0.8));
+        scene.environment = Some(Environment::uniform(Vec3::ONE));
+        let frame = render(gpu.device(), &scene, &furnace_settings(size, 32));
+        let columns = column_means(&frame);
+        // The floor's u runs along image x one way or the other: the half nearer u = 0 reads the left texel.
+        let (first, second) = (columns[..size as usize / 2 - 1].to_vec(), columns[size as usize / 2 + 1..].to_vec());
+        let near = |half: &[Vec3], want: Vec3| {
+            half.iter().all(|c| (*c - want).abs().max_element() <= 0.01 + 0.05 * want.max_element())
+        };
+        let ok = (near(&first, expected_left) && near(&second, expected_right))
+            || (near(&first, expected_right) && near(&second, expected_left));
+        eprintln!(
+            "{layer}: columns {:?} .. {:?}, expected {expected_left} | {expected_right}",
+            columns[0],
+            columns[size as usize - 1]
+        );
+        assert!(
+            ok,
+            "{layer}: columns {columns:?}, expected {expected_left} on one half and {expected_right} on the other"
+        );
+    }
+    gpu.finish().unwrap();
+}
+
+/// A 1×1 white PNG as a data URI.
+fn png_data_uri() -> String {
+    use base64::Engine as _;
+    let mut png = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut png);
+    image::ImageEncoder::write_image(encoder, &[255u8; 4], 1, 1, image::ExtendedColorType::Rgba8).unwrap();
+    format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(png))
+}
+
+/// The extensions load from glTF with their factors, textures (UV set, transform, the coat normal's scale) and the
+/// sheen colour texture marked sRGB; a scene's factors survive export and import; a factor out of range, a colour
+/// that is not three numbers in [0, 1], or a texture the file lacks fails naming the material, the extension and
+/// the property.
+#[test]
+fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
+    use serde_json::{json, Value};
+    let dir = common::cli::temp_dir("layered-gltf");
+    let coat = Clearcoat { factor: 0.7, roughness: 0.2, ..Default::default() };
+    let sheen = Sheen { color: Vec3::new(0.5, 0.25, 1.0), roughness: 0.6, ..Default::default() };
+    let mut scene = furnace(Material { clearcoat: Some(coat), sheen: Some(sheen), ..base(true) });
+    scene.environment = None;
+    let path = dir.join("layered.gltf");
+    strata::scene::gltf_export::write_gltf(&scene, &path).unwrap();
+    let loaded = strata::load_scene(&path).unwrap();
+    assert_eq!(loaded.materials[0].clearcoat, Some(coat));
+    assert_eq!(loaded.materials[0].sheen, Some(sheen));
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+
+    let original: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    let with = |edit: &dyn Fn(&mut Value)| -> anyhow::Result<Scene> {
+        let mut doc = original.clone();
+        doc["images"] = json!([{"uri": png_data_uri()}]);
+        doc["textures"] = json!([{"source": 0}, {"source": 0}]);
+        edit(&mut doc);
+        let file = dir.join("edited.gltf");
+        std::fs::write(&file, serde_json::to_vec(&doc).unwrap()).unwrap();
+        strata::load_scene(&file)
+    };
+    let textured = with(&|doc| {
+        let ext = &mut doc["materials"][0]["extensions"];
+        ext["KHR_materials_clearcoat"]["clearcoatTexture"] = json!({"index": 1, "texCoord": 1});
+        ext["KHR_materials_clearcoat"]["clearcoatRoughnessTexture"] = json!({"index": 0,
+            "extensions": {"KHR_texture_transform": {"scale": [2, 2]}}});
+        ext["KHR_materials_clearcoat"]["clearcoatNormalTexture"] = json!({"index": 1, "scale": 0.5});
+        ext["KHR_materials_sheen"]["sheenColorTexture"] = json!({"index": 1});
+        ext["KHR_materials_sheen"]["sheenRoughnessTexture"] = json!({"index": 0});
+    })
+    .unwrap();
+    let m = &textured.materials[0];
+    let c = m.clearcoat.unwrap();
+    assert_eq!((c.texture.unwrap().texture, c.texture.unwrap().tex_coord), (1, 1));
+    assert_eq!(c.roughness_texture.unwrap().transform.unwrap().scale, glam::Vec2::splat(2.0));
+    assert_eq!((c.normal_texture.unwrap().texture, c.normal_scale), (1, 0.5));
+    let s = m.sheen.unwrap();
+    assert_eq!((s.color_texture.unwrap().texture, s.roughness_texture.unwrap().texture), (1, 0));
+    assert!(textured.textures[1].srgb, "the sheen colour texture holds sRGB colour");
+
+    type Edit<'a> = &'a dyn Fn(&mut Value);
+    let failures: [(&str, Edit); 4] = [
+        ("\"clearcoatFactor\" is 1.5", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1.5)
+        }),
+        ("\"clearcoatRoughnessFactor\" is \"smooth\"", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatRoughnessFactor"] = json!("smooth")
+        }),
+        ("\"sheenColorFactor\" is [1,2]", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenColorFactor"] = json!([1, 2])
+        }),
+        ("\"sheenColorTexture\" names texture 5; the file has 2", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenColorTexture"] = json!({"index": 5})
+        }),
+    ];
+    for (says, edit) in failures {
+        let error = format!("{:#}", with(edit).unwrap_err());
+        let extension = if says.contains("sheen") { "KHR_materials_sheen" } else { "KHR_materials_clearcoat" };
+        assert!(error.contains("white base") && error.contains(extension) && error.contains(says), "{error}");
+    }
+}
