@@ -80,8 +80,11 @@ fn material_offsets() -> Vec<(&'static str, usize)> {
         specular_color_texture, metallic_roughness_uv_rows, normal_uv_rows, emissive_uv_rows, transmission_uv_rows,
         specular_color, specular_uv_rows, specular_color_uv_rows, unlit, absorption, clearcoat, sheen,
         clearcoat_texture, clearcoat_roughness_texture, clearcoat_normal_texture, sheen_color_texture,
-        sheen_roughness_texture, pad, clearcoat_uv_rows, clearcoat_roughness_uv_rows, clearcoat_normal_uv_rows,
-        sheen_color_uv_rows, sheen_roughness_uv_rows);
+        sheen_roughness_texture, diffuse_transmission_texture, diffuse_transmission_color_texture, pad,
+        clearcoat_uv_rows, clearcoat_roughness_uv_rows, clearcoat_normal_uv_rows, sheen_color_uv_rows,
+        sheen_roughness_uv_rows, diffuse_transmission, diffuse_transmission_uv_rows,
+        diffuse_transmission_color_uv_rows, iridescence, iridescence_texture, iridescence_thickness_texture, pad1,
+        iridescence_uv_rows, iridescence_thickness_uv_rows);
     v
 }
 

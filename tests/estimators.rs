@@ -456,10 +456,11 @@ fn estimators_agree_on_every_material_and_light() {
 
 /// The layers (KHR_materials_clearcoat, _sheen; layers.glsl): the coat joins the specular lobe's estimators with one
 /// mixture density, the sheen the diffuse lobe's, so light sampling, BSDF sampling and MIS must still agree on
-/// floors that carry them under a quad light.
+/// floors that carry them under a quad light; and a floor that transmits diffusely
+/// (KHR_materials_diffuse_transmission), lit from above and through itself from below.
 #[test]
 fn estimators_agree_on_layered_materials() {
-    use strata::scene::{Clearcoat, Sheen};
+    use strata::scene::{Clearcoat, DiffuseTransmission, Sheen};
     let gpu = GpuTest::new();
     let coat = |roughness| Some(Clearcoat { factor: 1.0, roughness, ..Default::default() });
     let sheen = |roughness| Some(Sheen { color: Vec3::new(0.9, 0.7, 0.5), roughness, ..Default::default() });
@@ -472,11 +473,20 @@ fn estimators_agree_on_layered_materials() {
             Material { clearcoat: coat(0.1), sheen: sheen(0.3), metallic: 1.0, ..glossy(0.3) },
         ),
     ];
+    let transmits = Some(DiffuseTransmission { factor: 0.6, color: Vec3::new(1.0, 0.6, 0.3), ..Default::default() });
     let mut cases = Vec::new();
-    for (name, floor) in floors {
+    for (name, floor) in floors.into_iter().chain([(
+        "floor transmitting diffusely, lit from both sides",
+        Material { diffuse_transmission: transmits, ..glossy(0.6) },
+    )]) {
+        let from_below = floor.diffuse_transmission.is_some();
         let mut scene = stage(floor);
         let light = facing(Vec3::new(0.0, 1.2, -1.0), Vec3::NEG_Y);
         analytic_light(&mut scene, LightShape::Quad { size: Vec2::splat(0.8) }, 4.0, light);
+        if from_below {
+            let below = facing(Vec3::new(0.5, -0.6, -0.5), Vec3::Y);
+            analytic_light(&mut scene, LightShape::Quad { size: Vec2::splat(0.8) }, 4.0, below);
+        }
         for (indirect, bounces) in [(false, 0), (false, 3), (true, 2)] {
             let label = format!("{name}, {}--bounces {bounces}", if indirect { "--indirect " } else { "" });
             cases.push((label, scene.clone(), comparison_settings(64, indirect, bounces)));

@@ -1,19 +1,20 @@
-//! The layered glTF materials, KHR_materials_clearcoat and KHR_materials_sheen, against what they must equal in a
-//! white furnace (a sphere in a uniform environment of radiance 1): over a black base each layer reflects its own
+//! The layered glTF materials, KHR_materials_clearcoat and KHR_materials_sheen, and KHR_materials_diffuse_transmission
+//! against what they must equal in a white furnace (a sphere in a uniform environment of radiance 1): over a black base each layer reflects its own
 //! directional albedo at each pixel's view cosine (the CPU twins' integrals, math::ggx and math::sheen), and over a
 //! white base the layers and the base together reflect exactly what arrives (albedo scaling); the G-buffer's visible
-//! surface, met again by a short ray, shades as the reference mode's primary rays do; light sampling, BSDF sampling
-//! and MIS converge to one picture of a coat under a quad light; and the glTF extensions load, with their textures,
-//! or fail naming the material, the extension and the property. Every GPU test runs under the validation layer.
+//! surface, met again by a short ray, shades as the reference mode's primary rays do (tests/estimators.rs, with the
+//! agreement of light sampling, BSDF sampling and MIS on layered floors); a diffusely transmitting sphere returns 1
+//! and a sheet lit from below shows its transmitted share; and the glTF extensions load, with their textures, or fail
+//! naming the material, the extension and the property. Every GPU test runs under the validation layer.
 use crate::common;
 
 use common::scenes::*;
 use common::GpuTest;
 use glam::{Vec3, Vec4};
-use strata::render::frame::RenderedFrame;
+use strata::render::frame::{render_frame, DirectLight, FrameOptions, RenderedFrame};
 use strata::scene::environment::Environment;
 use strata::scene::settings::{RenderSettings, SamplerKind};
-use strata::scene::{Clearcoat, Material, Scene, Sheen};
+use strata::scene::{Clearcoat, DiffuseTransmission, Iridescence, Material, Scene, Sheen};
 
 /// A unit sphere at the origin, seen from this far with a 30° vertical field of view (the grazing silhouette in view).
 const DISTANCE: f32 = 5.0;
@@ -153,6 +154,94 @@ fn a_sheen_reflects_its_albedo_over_black_and_with_a_white_base_exactly_what_arr
     gpu.finish().unwrap();
 }
 
+/// KHR_materials_diffuse_transmission in a white furnace: a white sphere whose diffuse lobe passes all or half of
+/// itself through the surface still returns exactly what arrives (the light crosses the sphere and leaves by its
+/// far side), and a sheet seen from above in a uniform environment shows (1 − t)·albedo + t·colour, the transmitted
+/// share lit from below, by light sampling alone and by BSDF sampling alone (rays through the sheet).
+#[test]
+fn diffuse_transmission_passes_its_share_through_and_makes_no_energy() {
+    use strata::scene::library::place;
+    let gpu = GpuTest::new();
+    for factor in [1.0f32, 0.5] {
+        let transmits = DiffuseTransmission { factor, ..Default::default() };
+        let sphere = furnace(Material { diffuse_transmission: Some(transmits), ..base(true) });
+        let frame = render(gpu.device(), &sphere, &furnace_settings(64, 64));
+        // Light reaches the far side's inside only through the near side's sampled directions: noisy pixels (up to
+        // 1.8 at 64 spp), so only the bands' means are held to 1.
+        assert_bands(&frame, &format!("white sphere transmitting {factor}"), 0.004, f64::INFINITY, |_| 1.0);
+    }
+    let (albedo, factor, color) = (0.5f32, 0.6f32, Vec3::new(1.0, 0.5, 0.25));
+    let mut sheet = Scene::default();
+    sheet.materials.push(Material {
+        base_color: Vec4::new(albedo, albedo, albedo, 1.0),
+        diffuse_transmission: Some(DiffuseTransmission { factor, color, ..Default::default() }),
+        ..base(true)
+    });
+    let (plane, at) = plane_at(glam::Vec2::splat(4.0), Vec3::ZERO, false, 0);
+    place(&mut sheet, "sheet", plane, at);
+    sheet.camera = Some(ortho_down(Vec3::ZERO, 2.0, 0.5));
+    sheet.environment = Some(Environment::uniform(Vec3::ONE));
+    let want = Vec3::splat((1.0 - factor) * albedo) + factor * color;
+    let on_gpu = strata::render::SceneOnGpu::upload(gpu.device(), &sheet).expect("upload");
+    for direct_light in [DirectLight::LightSampling, DirectLight::BsdfSampling] {
+        let s = settings(16, 16, 256, SamplerKind::MultiJittered);
+        let options = FrameOptions { direct_light, ..Default::default() };
+        let frame = render_frame(gpu.device(), &sheet, &on_gpu, &s, &options, &mut |_, _| true).expect("render");
+        let n = frame.linear.pixels.len() as f32;
+        let mean = frame.linear.pixels.iter().map(|p| Vec3::from_slice(&p[..3])).sum::<Vec3>() / n;
+        let sd = (frame.linear.pixels.iter().map(|p| (Vec3::from_slice(&p[..3]) - mean).powf(2.0)).sum::<Vec3>()
+            / (n - 1.0))
+            .powf(0.5);
+        let tolerance = sd / n.sqrt() * 4.0 + Vec3::splat(0.002);
+        eprintln!("sheet, {direct_light:?}: {mean} ± {}, (1 − t)·albedo + t·colour = {want}", sd / n.sqrt());
+        assert!(((mean - want).abs() - tolerance).max_element() <= 0.0, "sheet, {direct_light:?}: {mean}, want {want}");
+    }
+    drop(on_gpu);
+    gpu.finish().unwrap();
+}
+
+/// KHR_materials_iridescence: a film of no thickness is no film (a glossy dielectric over black seen straight down
+/// in a uniform environment, traced as primary rays both ways), a 300 nm film recolours that reflection by the CPU
+/// twin's ratio at normal view (math::iridescence::film_ratio), and a white dielectric under a
+/// 400 nm film still reflects exactly what arrives in a white furnace (its diffuse base takes what the film leaves).
+#[test]
+fn a_thin_film_of_no_thickness_is_no_film_and_a_thicker_one_recolours_as_its_twin_says() {
+    use strata::scene::library::place;
+    use strata::scene::settings::Primary;
+    let gpu = GpuTest::new();
+    let mirror = |film: Option<Iridescence>| {
+        let mut scene = Scene::default();
+        scene.materials.push(Material { roughness: 0.5, specular: 1.0, iridescence: film, ..base(false) });
+        let (plane, at) = plane_at(glam::Vec2::splat(4.0), Vec3::ZERO, false, 0);
+        place(&mut scene, "mirror", plane, at);
+        scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, 0.5));
+        scene.environment = Some(Environment::uniform(Vec3::ONE));
+        // Light samples alone (no chain, so no Russian roulette whose survival would follow the film's colour):
+        // every sample of the three renders is the same but for the film's factor, so their ratio is the film's.
+        let s = RenderSettings { primary: Primary::Rays, bounces: 0, ..settings(8, 8, 16, SamplerKind::MultiJittered) };
+        let frame = render(gpu.device(), &scene, &s);
+        frame.linear.pixels.iter().map(|p| Vec3::from_slice(&p[..3])).sum::<Vec3>() / frame.linear.pixels.len() as f32
+    };
+    let film = |thickness: f32| Some(Iridescence { factor: 1.0, thickness_max: thickness, ..Default::default() });
+    let (bare, none, thick) = (mirror(None), mirror(film(0.0)), mirror(film(300.0)));
+    eprintln!("bare {bare}, film of 0 nm {none}, of 300 nm {thick}");
+    assert!(((none - bare) / bare).abs().max_element() < 1e-5, "a film of no thickness: {none}, none at all: {bare}");
+    let want = strata::math::iridescence::film_ratio(1.0, 1.3, 300.0, [0.04; 3]);
+    let got = thick / bare;
+    for c in 0..3 {
+        assert!((f64::from(got[c]) - want[c]).abs() < 0.01 * want[c], "300 nm film: ratio {got}, twin {want:?}");
+    }
+    let white = Material {
+        iridescence: Some(Iridescence { factor: 1.0, ..Default::default() }),
+        roughness: 0.3,
+        specular: 1.0,
+        ..base(true)
+    };
+    let frame = render(gpu.device(), &furnace(white), &furnace_settings(64, 64));
+    assert_bands(&frame, "white dielectric under a 400 nm film", 0.004, 1.3, |_| 1.0);
+    gpu.finish().unwrap();
+}
+
 /// A 2×1 texture, nearest and clamped: `left` and `right` texels (RGBA8; sRGB where a material reads it as colour).
 fn two_texel_texture(scene: &mut Scene, name: &str, left: [u8; 4], right: [u8; 4]) -> strata::scene::TextureRef {
     use strata::scene::{Texture, TextureImage, Wrap};
@@ -240,13 +329,24 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
     let dir = common::cli::temp_dir("layered-gltf");
     let coat = Clearcoat { factor: 0.7, roughness: 0.2, ..Default::default() };
     let sheen = Sheen { color: Vec3::new(0.5, 0.25, 1.0), roughness: 0.6, ..Default::default() };
-    let mut scene = furnace(Material { clearcoat: Some(coat), sheen: Some(sheen), ..base(true) });
+    let transmits = DiffuseTransmission { factor: 0.3, color: Vec3::new(0.9, 0.5, 0.2), ..Default::default() };
+    let film = Iridescence { factor: 0.9, ior: 1.8, thickness_min: 50.0, thickness_max: 700.0, ..Default::default() };
+    let layered = Material {
+        clearcoat: Some(coat),
+        sheen: Some(sheen),
+        diffuse_transmission: Some(transmits),
+        iridescence: Some(film),
+        ..base(true)
+    };
+    let mut scene = furnace(layered);
     scene.environment = None;
     let path = dir.join("layered.gltf");
     strata::scene::gltf_export::write_gltf(&scene, &path).unwrap();
     let loaded = strata::load_scene(&path).unwrap();
     assert_eq!(loaded.materials[0].clearcoat, Some(coat));
     assert_eq!(loaded.materials[0].sheen, Some(sheen));
+    assert_eq!(loaded.materials[0].diffuse_transmission, Some(transmits));
+    assert_eq!(loaded.materials[0].iridescence, Some(film));
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
 
     let original: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
@@ -267,6 +367,9 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
         ext["KHR_materials_clearcoat"]["clearcoatNormalTexture"] = json!({"index": 1, "scale": 0.5});
         ext["KHR_materials_sheen"]["sheenColorTexture"] = json!({"index": 1});
         ext["KHR_materials_sheen"]["sheenRoughnessTexture"] = json!({"index": 0});
+        ext["KHR_materials_diffuse_transmission"]["diffuseTransmissionTexture"] = json!({"index": 0});
+        ext["KHR_materials_iridescence"]["iridescenceThicknessTexture"] = json!({"index": 1, "texCoord": 1});
+        ext["KHR_materials_diffuse_transmission"]["diffuseTransmissionColorTexture"] = json!({"index": 1});
     })
     .unwrap();
     let m = &textured.materials[0];
@@ -277,9 +380,13 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
     let s = m.sheen.unwrap();
     assert_eq!((s.color_texture.unwrap().texture, s.roughness_texture.unwrap().texture), (1, 0));
     assert!(textured.textures[1].srgb, "the sheen colour texture holds sRGB colour");
+    let d = m.diffuse_transmission.unwrap();
+    assert_eq!((d.texture.unwrap().texture, d.color_texture.unwrap().texture), (0, 1));
+    let thickness = m.iridescence.unwrap().thickness_texture.unwrap();
+    assert_eq!((thickness.texture, thickness.tex_coord), (1, 1));
 
     type Edit<'a> = &'a dyn Fn(&mut Value);
-    let failures: [(&str, Edit); 4] = [
+    let failures: [(&str, Edit); 6] = [
         ("\"clearcoatFactor\" is 1.5", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1.5)
         }),
@@ -289,13 +396,28 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
         ("\"sheenColorFactor\" is [1,2]", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenColorFactor"] = json!([1, 2])
         }),
+        ("\"diffuseTransmissionColorFactor\" is \"white\"", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_diffuse_transmission"]["diffuseTransmissionColorFactor"] =
+                json!("white")
+        }),
+        ("\"iridescenceIor\" is 0.5: it is at least 1", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_iridescence"]["iridescenceIor"] = json!(0.5)
+        }),
         ("\"sheenColorTexture\" names texture 5; the file has 2", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenColorTexture"] = json!({"index": 5})
         }),
     ];
     for (says, edit) in failures {
         let error = format!("{:#}", with(edit).unwrap_err());
-        let extension = if says.contains("sheen") { "KHR_materials_sheen" } else { "KHR_materials_clearcoat" };
+        let extension = if says.contains("sheen") {
+            "KHR_materials_sheen"
+        } else if says.contains("iridescence") {
+            "KHR_materials_iridescence"
+        } else if says.contains("diffuseTransmission") {
+            "KHR_materials_diffuse_transmission"
+        } else {
+            "KHR_materials_clearcoat"
+        };
         assert!(error.contains("white base") && error.contains(extension) && error.contains(says), "{error}");
     }
 }

@@ -28,6 +28,17 @@ struct Shading {
     // 1 − each layer's directional albedo there (face_viewer; 1 until then).
     float coat_share;
     float sheen_share;
+    // KHR_materials_diffuse_transmission: the share of the diffuse lobe that passes to the other side (factor ×
+    // texture; 0: none), and its colour.
+    float diffuse_transmission;
+    vec3 diffuse_transmission_color;
+    // KHR_materials_iridescence: the film's factor (× texture), index and thickness (nm), and what it multiplies
+    // the dielectric's and the metal's Fresnel by, seen from the viewer (layers.glsl's set_film; 1 without a film).
+    float iridescence;
+    float iridescence_ior;
+    float iridescence_thickness;
+    vec3 film_dielectric;
+    vec3 film_metal;
 };
 
 float luminance(vec3 c) {
@@ -88,6 +99,11 @@ vec3 fresnel(Shading m, float vh, out float base_share) {
     float w = x2 * x2 * x;
     vec3 dielectric = f0 + (vec3(m.specular) - f0) * w;
     vec3 metal = m.albedo + (vec3(1.0) - m.albedo) * w;
+    if (m.film_dielectric != vec3(1.0) || m.film_metal != vec3(1.0)) {
+        // A thin film (KHR_materials_iridescence) recolours both by its interference at the view angle.
+        dielectric = min(dielectric * m.film_dielectric, vec3(1.0));
+        metal = min(metal * m.film_metal, vec3(1.0));
+    }
     base_share = 1.0 - max(dielectric.x, max(dielectric.y, dielectric.z));
     return mix(dielectric, metal, m.metallic);
 }
@@ -120,7 +136,7 @@ void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 spec
 // roughness: `terms` from math::brdf's table), the largest channel's as fresnel's base_share takes.
 float diffuse_share_from(Shading m, vec2 terms) {
     vec3 f0 = dielectric_f0(m);
-    vec3 albedo = f0 * terms.x + (vec3(m.specular) - f0) * terms.y;
+    vec3 albedo = (f0 * terms.x + (vec3(m.specular) - f0) * terms.y) * m.film_dielectric;
     return clamp(1.0 - max(albedo.x, max(albedo.y, albedo.z)), 0.0, 1.0);
 }
 

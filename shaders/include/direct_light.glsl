@@ -103,7 +103,11 @@ vec3 direct_light(Surface s, vec3 v, uint pixel, uint dim, bool bsdf_follows, in
             ls.value *= textureLod(textures[nonuniformEXT(m.emissive_texture)], texture_uv(m.emissive_uv_rows, uv0, uv1), 0.0).rgb;
         }
     }
-    if (ls.value == vec3(0.0) || dot(s.geometric, ls.dir) <= 0.0) return vec3(0.0);
+    // Light from behind the face reaches only a surface that transmits diffusely, and only where the shading normal
+    // agrees that it is behind (as a light in front of the face but behind the shading normal reflects nothing).
+    bool behind = dot(s.geometric, ls.dir) <= 0.0;
+    if (ls.value == vec3(0.0) || (behind && !transmits_diffusely(s.m))) return vec3(0.0);
+    if (transmits_diffusely(s.m) && behind != (dot(s.normal, ls.dir) < 0.0)) return vec3(0.0);
     vec3 diffuse;
     vec3 specular;
     layered_brdf_cos(s.m, s.normal, v, ls.dir, diffuse, specular);

@@ -48,7 +48,7 @@ struct GpuMaterial {
     vec4 specular_color_uv_rows[2];
     vec4 absorption;         // rgb σ per metre inside the material (KHR_materials_volume); 0: none
     // KHR_materials_clearcoat: x factor (0: no coat), y roughness, z the coat normal texture's scale, w 1 where the
-    // material has any layer (clear coat or sheen; docs/architecture.md, "Layered materials").
+    // material has any layer or diffuse transmission (docs/architecture.md, "Layered materials").
     vec4 clearcoat;
     vec4 sheen;              // KHR_materials_sheen: rgb colour (black: no sheen), a roughness
     int clearcoat_texture;   // R scales the coat's factor; -1: none (and likewise below)
@@ -56,12 +56,23 @@ struct GpuMaterial {
     int clearcoat_normal_texture;
     int sheen_color_texture;          // RGB scales the sheen colour
     int sheen_roughness_texture;      // A scales the sheen roughness
-    int pad[3];
+    int diffuse_transmission_texture;        // A scales the diffuse transmission factor
+    int diffuse_transmission_color_texture;  // RGB scales the diffuse transmission colour
+    int pad;
     vec4 clearcoat_uv_rows[2];
     vec4 clearcoat_roughness_uv_rows[2];
     vec4 clearcoat_normal_uv_rows[2];
     vec4 sheen_color_uv_rows[2];
     vec4 sheen_roughness_uv_rows[2];
+    vec4 diffuse_transmission;  // KHR_materials_diffuse_transmission: rgb colour, a factor (0: none)
+    vec4 diffuse_transmission_uv_rows[2];
+    vec4 diffuse_transmission_color_uv_rows[2];
+    vec4 iridescence;  // KHR_materials_iridescence: x factor (0: no film), y the film's index, z, w thickness range (nm)
+    int iridescence_texture;            // R scales the factor
+    int iridescence_thickness_texture;  // G places the thickness within the range (without one: its maximum)
+    int pad1[2];
+    vec4 iridescence_uv_rows[2];
+    vec4 iridescence_thickness_uv_rows[2];
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.

@@ -81,6 +81,81 @@ float coat_albedo(float nv, float roughness) {
     return COAT_F0 * terms.x + (1.0 - COAT_F0) * terms.y;
 }
 
+// The thin film (KHR_materials_iridescence; CPU twin math::iridescence, which says how it follows Belcour and Barla
+// 2017 and the extension's sample renderer). CIE XYZ to linear Rec.709, columns.
+const mat3 XYZ_TO_REC709 = mat3(3.2404542, -0.9692660, 0.0556434, -1.5371385, 1.8760108, -0.2040259, -0.4985314,
+                                0.0415560, 1.0572252);
+
+// The exact unpolarised Fresnel reflectance from index n1 into n2 at cosine c (1 beyond the critical angle).
+float dielectric_fresnel(float n1, float n2, float c) {
+    float sin2_sq = (n1 / n2) * (n1 / n2) * (1.0 - c * c);
+    if (sin2_sq >= 1.0) return 1.0;
+    float c2 = sqrt(1.0 - sin2_sq);
+    float rs = (n1 * c - n2 * c2) / (n1 * c + n2 * c2);
+    float rp = (n2 * c - n1 * c2) / (n2 * c + n1 * c2);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// The colour matching functions' response to an interference of optical path difference `opd` (nm) with phase
+// `shift` per XYZ channel, in linear Rec.709 (the paper's Fourier-space Gaussian fit).
+vec3 film_sensitivity(float opd, vec3 shift) {
+    float phase = 2.0 * PI * opd * 1.0e-9;
+    vec3 val = vec3(5.4856e-13, 4.4201e-13, 5.2481e-13);
+    vec3 pos = vec3(1.6810e+06, 1.7953e+06, 2.2084e+06);
+    vec3 var = vec3(4.3278e+09, 9.3046e+09, 6.6121e+09);
+    vec3 xyz = val * sqrt(2.0 * PI * var) * cos(pos * phase + shift) * exp(-phase * phase * var);
+    xyz.x += 9.7470e-14 * sqrt(2.0 * PI * 4.5282e+09) * cos(2.2399e+06 * phase + shift.x) * exp(-4.5282e+09 * phase * phase);
+    return XYZ_TO_REC709 * (xyz / 1.0685e-7);
+}
+
+// The film's reflectance per channel at view cosine c1 over a base of normal-incidence reflectance base_f0.
+vec3 thin_film_fresnel(float c1, float film_ior, float thickness, vec3 base_f0) {
+    float t = clamp(thickness / 0.03, 0.0, 1.0);
+    float film = 1.0 + (film_ior - 1.0) * t * t * (3.0 - 2.0 * t);
+    float cos2_sq = 1.0 - (1.0 / film) * (1.0 / film) * (1.0 - c1 * c1);
+    if (cos2_sq < 0.0) return vec3(1.0);
+    float c2 = sqrt(cos2_sq);
+    float r12 = dielectric_fresnel(1.0, film, c1);
+    float t121 = 1.0 - r12;
+    float phi21 = PI - (film < 1.0 ? PI : 0.0);
+    vec3 root = sqrt(clamp(base_f0, 0.0, 0.9999));
+    vec3 base_ior = (1.0 + root) / (1.0 - root);
+    vec3 f0_23 = (base_ior - film) / (base_ior + film);
+    f0_23 *= f0_23;
+    float x = clamp(1.0 - c2, 0.0, 1.0);
+    float x2 = x * x;
+    vec3 r23 = f0_23 + (1.0 - f0_23) * (x2 * x2 * x);
+    vec3 phi23 = vec3(base_ior.x < film ? PI : 0.0, base_ior.y < film ? PI : 0.0, base_ior.z < film ? PI : 0.0);
+    float opd = 2.0 * film * thickness * c2;
+    vec3 r123 = clamp(r12 * r23, 0.0, 0.9999);
+    vec3 rs = t121 * t121 * r23 / (1.0 - r123);
+    vec3 reflectance = r12 + rs;
+    vec3 cm = rs - t121;
+    for (int k = 1; k <= 2; k++) {
+        cm *= sqrt(r123);
+        reflectance += cm * 2.0 * film_sensitivity(float(k) * opd, float(k) * (phi21 + phi23));
+    }
+    return max(reflectance, vec3(0.0));
+}
+
+// The film's factor on the dielectric's and the metal's Fresnel, seen at view cosine nv: its reflectance over the
+// zero-thickness film's (the base's Schlick reflectance), mixed in by the film's factor; 1 without a film.
+void set_film(inout Shading m, float nv) {
+    if (!(m.iridescence > 0.0)) return;
+    float c = clamp(nv, 0.0, 1.0);
+    vec3 f0s[2] = vec3[2](dielectric_f0(m) / max(m.specular, 1e-6), m.albedo);
+    vec3 ratios[2];
+    for (int i = 0; i < 2; i++) {
+        vec3 film = thin_film_fresnel(c, m.iridescence_ior, m.iridescence_thickness, f0s[i]);
+        vec3 none = thin_film_fresnel(c, m.iridescence_ior, 0.0, f0s[i]);
+        vec3 ratio = vec3(none.x > 0.0 ? film.x / none.x : 1.0, none.y > 0.0 ? film.y / none.y : 1.0,
+                          none.z > 0.0 ? film.z / none.z : 1.0);
+        ratios[i] = mix(vec3(1.0), ratio, m.iridescence);
+    }
+    m.film_dielectric = ratios[0];
+    m.film_metal = ratios[1];
+}
+
 bool has_sheen(Shading m) {
     return LAYERS != 0u && max(m.sheen_color.r, max(m.sheen_color.g, m.sheen_color.b)) > 0.0;
 }
@@ -120,14 +195,29 @@ vec3 sheen_cos(Shading m, vec3 n, vec3 v, vec3 l) {
     return m.sheen_color * (lobe / max(sheen_albedo(nv, m.sheen_roughness), 1.0));
 }
 
+bool transmits_diffusely(Shading m) {
+    return LAYERS != 0u && m.diffuse_transmission > 0.0;
+}
+
 // brdf_cos with the layers: the base's lobes under both layers' shares, the sheen (with the diffuse lobe) under the
-// coat's, the coat (with the specular lobe) on top.
+// coat's, the coat (with the specular lobe) on top. With diffuse transmission the diffuse lobe reflects 1 − t of
+// itself and passes t, tinted, to light from the other side of the surface (the extension's mix of a Lambertian BRDF
+// and BTDF), in the diffuse lobe's estimators.
 void layered_brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 specular) {
     brdf_cos(m, n, v, l, diffuse, specular);
     if (LAYERS == 0u) return;
     float under = m.coat_share * m.sheen_share;
     diffuse *= under;
     specular *= under;
+    if (transmits_diffusely(m)) {
+        float nl = dot(n, l);
+        if (nl < 0.0) {
+            float base = m.diffuse_share * (1.0 - m.metallic) * (1.0 - m.transmission) * m.diffuse_transmission;
+            diffuse = under * base * m.diffuse_transmission_color * (-nl / PI);
+            return;
+        }
+        diffuse *= 1.0 - m.diffuse_transmission;
+    }
     if (has_sheen(m)) diffuse += m.coat_share * sheen_cos(m, n, v, l);
     if (has_coat(m)) specular += vec3(coat_cos(m, v, l));
 }
@@ -165,12 +255,23 @@ float layered_diffuse_choice(Shading m, vec3 v) {
     if (LAYERS == 0u) return diffuse_choice(m);
     float under = m.coat_share * m.sheen_share;
     float sheen = max(m.sheen_color.r, max(m.sheen_color.g, m.sheen_color.b));
-    float d = under * luminance((1.0 - m.metallic) * (1.0 - m.transmission) * m.albedo) + m.coat_share * sheen * 0.5;
+    vec3 diffuse_color = mix(m.albedo, m.diffuse_transmission_color, m.diffuse_transmission);
+    float d = under * luminance((1.0 - m.metallic) * (1.0 - m.transmission) * diffuse_color) + m.coat_share * sheen * 0.5;
     float s = under * (luminance(mix(dielectric_f0(m), m.albedo, m.metallic)) +
                        luminance((1.0 - m.metallic) * m.transmission * m.albedo)) +
               m.clearcoat * COAT_F0;
     if (!(d > 0.0)) return 0.0;
     return s > 0.0 ? min(d / (d + s), 0.75) : 1.0;
+}
+
+// The probability that a diffuse bounce passes to the other side of the surface: the transmitted share's weight
+// against the reflected share's and the sheen's (0 without diffuse transmission).
+float diffuse_transmit_choice(Shading m) {
+    if (!transmits_diffusely(m)) return 0.0;
+    float back = m.diffuse_transmission * luminance(m.diffuse_transmission_color);
+    float sheen = max(m.sheen_color.r, max(m.sheen_color.g, m.sheen_color.b));
+    float front = (1.0 - m.diffuse_transmission) * luminance(m.albedo) * m.sheen_share + sheen * 0.5;
+    return back + front > 0.0 ? back / (back + front) : 0.0;
 }
 
 // sample_specular with the coat: the coat's visible normals (probability coat_choice) or the base's lobe; a

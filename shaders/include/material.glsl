@@ -22,9 +22,10 @@ bool alpha_test_passes(GpuMaterial m, float alpha, float u) {
     return m.alpha_mode == ALPHA_MASK ? alpha >= m.alpha_cutoff : alpha > u;
 }
 
-// KHR_materials_clearcoat's and KHR_materials_sheen's parameters at a point (factors × textures, glTF's channels:
-// the coat's factor in R and roughness in G, the sheen's colour in RGB and roughness in A), where the material has
-// a layer; none elsewhere. The coat's normal is `n_vertex`, the interpolated vertex normal (the base's normal texture
+// KHR_materials_clearcoat's, _sheen's, _iridescence's and _diffuse_transmission's parameters at a point (factors ×
+// textures, glTF's channels: the coat's factor in R and roughness in G, the sheen's colour in RGB and roughness in
+// A, the film's factor in R and thickness between its bounds in G, the transmitted share in A and its colour in
+// RGB), where the material has any of them; none elsewhere. The coat's normal is `n_vertex`, the interpolated vertex normal (the base's normal texture
 // and bump lie under the coat), tilted by the coat's own normal texture where it has one.
 void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu, vec3 dpdv, vec2 footprint_lod,
                      inout Shading s) {
@@ -35,7 +36,39 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
     s.sheen_roughness = 0.0;
     s.coat_share = 1.0;
     s.sheen_share = 1.0;
+    s.diffuse_transmission = 0.0;
+    s.diffuse_transmission_color = vec3(1.0);
+    s.iridescence = 0.0;
+    s.iridescence_ior = 1.0;
+    s.iridescence_thickness = 0.0;
+    s.film_dielectric = vec3(1.0);
+    s.film_metal = vec3(1.0);
     if (m.clearcoat.w == 0.0) return;
+    s.iridescence = m.iridescence.x;
+    if (m.iridescence_texture >= 0) {
+        s.iridescence *= material_texture(m.iridescence_texture, texture_uv(m.iridescence_uv_rows, uv0, uv1),
+                                          m.iridescence_uv_rows, footprint_lod).r;
+    }
+    s.iridescence_ior = m.iridescence.y;
+    s.iridescence_thickness = m.iridescence.w;
+    if (m.iridescence_thickness_texture >= 0) {
+        float g = material_texture(m.iridescence_thickness_texture,
+                                   texture_uv(m.iridescence_thickness_uv_rows, uv0, uv1),
+                                   m.iridescence_thickness_uv_rows, footprint_lod).g;
+        s.iridescence_thickness = mix(m.iridescence.z, m.iridescence.w, g);
+    }
+    s.diffuse_transmission = m.diffuse_transmission.a;
+    if (m.diffuse_transmission_texture >= 0) {
+        s.diffuse_transmission *= material_texture(m.diffuse_transmission_texture,
+                                                   texture_uv(m.diffuse_transmission_uv_rows, uv0, uv1),
+                                                   m.diffuse_transmission_uv_rows, footprint_lod).a;
+    }
+    s.diffuse_transmission_color = m.diffuse_transmission.rgb;
+    if (m.diffuse_transmission_color_texture >= 0) {
+        s.diffuse_transmission_color *= material_texture(m.diffuse_transmission_color_texture,
+                                                         texture_uv(m.diffuse_transmission_color_uv_rows, uv0, uv1),
+                                                         m.diffuse_transmission_color_uv_rows, footprint_lod).rgb;
+    }
     s.clearcoat = m.clearcoat.x;
     s.clearcoat_roughness = m.clearcoat.y;
     if (m.clearcoat_texture >= 0) {

@@ -71,14 +71,19 @@ bool next_chain_ray(Surface s, vec3 v, uint depth, inout ChainRay r) {
     float u_lobe = sample1(r.pixel, dim + VERTEX_LOBE_CHOICE);
     float p_diffuse = diffuse_probability(s.m, v);
     if (u_lobe < p_diffuse) {
-        r.dir = sample_cosine(s.normal, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION));
-        float nl = dot(s.normal, r.dir);
-        if (nl <= 0.0 || dot(s.geometric, r.dir) <= 0.0) return false;
+        // With diffuse transmission, the rest of u_lobe chooses the side: through the surface with p_through.
+        float p_through = diffuse_transmit_choice(s.m);
+        bool through = p_through > 0.0 && u_lobe < p_diffuse * p_through;
+        float p_side = through ? p_through : 1.0 - p_through;
+        vec3 side = through ? -s.normal : s.normal;
+        r.dir = sample_cosine(side, sample2(r.pixel, dim + VERTEX_LOBE_DIRECTION));
+        float nl = dot(side, r.dir);
+        if (nl <= 0.0 || dot(s.geometric, r.dir) * (through ? -1.0 : 1.0) <= 0.0) return false;
         vec3 diffuse;
         vec3 specular;
         layered_brdf_cos(s.m, s.normal, v, r.dir, diffuse, specular);
-        // f·cos / (p_diffuse · cos/π).
-        weight = diffuse * (PI / (nl * p_diffuse));
+        // f·cos / (p_diffuse · p_side · cos/π).
+        weight = diffuse * (PI / (nl * p_diffuse * p_side));
         r.pdf = DIFFUSE_BOUNCE;
         if (pc.indirect == 0u) r.gather_only = 1u;
     } else {

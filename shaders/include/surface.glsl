@@ -27,6 +27,7 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
         s.geometric = -s.geometric;
         s.m.clearcoat_normal = -s.m.clearcoat_normal;
     }
+    if (LAYERS != 0u) set_film(s.m, dot(s.normal, v));
     s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
     if (LAYERS != 0u) set_layer_shares(s.m, s.normal, v);
     s.absorption = m.absorption.rgb;
@@ -60,6 +61,11 @@ Surface gbuffer_surface(ivec2 p, uvec4 ids, vec3 v) {
     s.m.clearcoat_normal = s.normal;
     s.m.sheen_color = vec3(0.0);
     s.m.sheen_roughness = 0.0;
+    s.m.diffuse_transmission = 0.0;
+    s.m.diffuse_transmission_color = vec3(1.0);
+    s.m.iridescence = 0.0;
+    s.m.film_dielectric = vec3(1.0);
+    s.m.film_metal = vec3(1.0);
     face_viewer(s, v, materials[t.material]);
     return s;
 }

@@ -5,6 +5,7 @@ pub mod bump;
 pub mod dispersion;
 pub mod environment;
 pub mod ggx;
+pub mod iridescence;
 pub mod lens;
 pub mod noise;
 pub mod sampling;

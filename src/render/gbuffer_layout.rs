@@ -186,7 +186,7 @@ pub struct GpuMaterial {
     /// dispersion, 20 / V_d (KHR_materials_dispersion; 0: none).
     pub absorption: Vec4,
     /// KHR_materials_clearcoat: x the factor (0: no coat), y the roughness, z the coat normal texture's scale, w 1
-    /// where the material has a layer (`Material::is_layered`), else 0.
+    /// where the material has a layer or diffuse transmission (`Material::is_layered`), else 0.
     pub clearcoat: Vec4,
     /// KHR_materials_sheen: rgb the colour (black: no sheen), a the roughness.
     pub sheen: Vec4,
@@ -199,12 +199,29 @@ pub struct GpuMaterial {
     pub sheen_color_texture: i32,
     /// A scales the sheen roughness.
     pub sheen_roughness_texture: i32,
-    pub pad: [i32; 3],
+    /// A scales the diffuse transmission factor (KHR_materials_diffuse_transmission).
+    pub diffuse_transmission_texture: i32,
+    /// sRGB; RGB scales the diffuse transmission colour.
+    pub diffuse_transmission_color_texture: i32,
+    pub pad: i32,
     pub clearcoat_uv_rows: [Vec4; 2],
     pub clearcoat_roughness_uv_rows: [Vec4; 2],
     pub clearcoat_normal_uv_rows: [Vec4; 2],
     pub sheen_color_uv_rows: [Vec4; 2],
     pub sheen_roughness_uv_rows: [Vec4; 2],
+    /// KHR_materials_diffuse_transmission: rgb the colour, a the factor (0: none).
+    pub diffuse_transmission: Vec4,
+    pub diffuse_transmission_uv_rows: [Vec4; 2],
+    pub diffuse_transmission_color_uv_rows: [Vec4; 2],
+    /// KHR_materials_iridescence: x the factor (0: no film), y the film's index, z and w its thickness range (nm).
+    pub iridescence: Vec4,
+    /// R scales the iridescence factor.
+    pub iridescence_texture: i32,
+    /// G places the thickness between the range's ends (without one: its maximum).
+    pub iridescence_thickness_texture: i32,
+    pub pad1: [i32; 2],
+    pub iridescence_uv_rows: [Vec4; 2],
+    pub iridescence_thickness_uv_rows: [Vec4; 2],
 }
 
 impl GpuMaterial {
@@ -225,6 +242,8 @@ impl GpuMaterial {
         // An unlit material has no layers (KHR_materials_unlit): they are left out with the rest of its shading.
         let coat = m.clearcoat.filter(|_| !m.unlit).unwrap_or_default();
         let sheen = m.sheen.filter(|_| !m.unlit).unwrap_or_default();
+        let transmits = m.diffuse_transmission.filter(|_| !m.unlit).unwrap_or_default();
+        let film = m.iridescence.filter(|_| !m.unlit).unwrap_or_default();
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (c::ALPHA_OPAQUE, 0.0),
             AlphaMode::Mask { cutoff } => (c::ALPHA_MASK, cutoff),
@@ -274,7 +293,9 @@ impl GpuMaterial {
             clearcoat_normal_texture: texture(coat.normal_texture),
             sheen_color_texture: texture(sheen.color_texture),
             sheen_roughness_texture: texture(sheen.roughness_texture),
-            pad: [0; 3],
+            diffuse_transmission_texture: texture(transmits.texture),
+            diffuse_transmission_color_texture: texture(transmits.color_texture),
+            pad: 0,
             clearcoat_uv_rows: uv_rows(coat.texture),
             clearcoat_roughness_uv_rows: uv_rows(coat.roughness_texture),
             // The coat's normal texture, like the base's, reads TEXCOORD_0, whose derivatives are its tangent frame.
@@ -283,6 +304,15 @@ impl GpuMaterial {
             ),
             sheen_color_uv_rows: uv_rows(sheen.color_texture),
             sheen_roughness_uv_rows: uv_rows(sheen.roughness_texture),
+            diffuse_transmission: transmits.color.extend(transmits.factor),
+            diffuse_transmission_uv_rows: uv_rows(transmits.texture),
+            diffuse_transmission_color_uv_rows: uv_rows(transmits.color_texture),
+            iridescence: Vec4::new(film.factor, film.ior, film.thickness_min, film.thickness_max),
+            iridescence_texture: texture(film.texture),
+            iridescence_thickness_texture: texture(film.thickness_texture),
+            pad1: [0; 2],
+            iridescence_uv_rows: uv_rows(film.texture),
+            iridescence_thickness_uv_rows: uv_rows(film.thickness_texture),
         }
     }
 }
@@ -336,7 +366,12 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, sheen_roughness_texture), 432);
         assert_eq!(offset_of!(GpuMaterial, clearcoat_uv_rows), 448);
         assert_eq!(offset_of!(GpuMaterial, sheen_roughness_uv_rows), 576);
-        assert_eq!(size_of::<GpuMaterial>(), 608);
+        assert_eq!(offset_of!(GpuMaterial, diffuse_transmission), 608);
+        assert_eq!(offset_of!(GpuMaterial, diffuse_transmission_color_uv_rows), 656);
+        assert_eq!(offset_of!(GpuMaterial, iridescence), 688);
+        assert_eq!(offset_of!(GpuMaterial, iridescence_texture), 704);
+        assert_eq!(offset_of!(GpuMaterial, iridescence_thickness_uv_rows), 752);
+        assert_eq!(size_of::<GpuMaterial>(), 784);
     }
 
     #[test]

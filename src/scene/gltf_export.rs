@@ -179,6 +179,23 @@ fn material_json(m: &super::Material) -> Result<(Value, Vec<&'static str>)> {
         extensions.insert("KHR_materials_sheen".into(), layer);
         used.push("KHR_materials_sheen");
     }
+    if let Some(i) = m.iridescence {
+        if i.texture.is_some() || i.thickness_texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let film = json!({"iridescenceFactor": i.factor, "iridescenceIor": i.ior,
+            "iridescenceThicknessMinimum": i.thickness_min, "iridescenceThicknessMaximum": i.thickness_max});
+        extensions.insert("KHR_materials_iridescence".into(), film);
+        used.push("KHR_materials_iridescence");
+    }
+    if let Some(d) = m.diffuse_transmission {
+        if d.texture.is_some() || d.color_texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let lobe = json!({"diffuseTransmissionFactor": d.factor, "diffuseTransmissionColorFactor": d.color.to_array()});
+        extensions.insert("KHR_materials_diffuse_transmission".into(), lobe);
+        used.push("KHR_materials_diffuse_transmission");
+    }
     if m.double_sided {
         material["doubleSided"] = json!(true);
     }

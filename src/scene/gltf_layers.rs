@@ -1,13 +1,16 @@
-//! The layered glTF materials' extensions, `KHR_materials_clearcoat` and `KHR_materials_sheen`, read from their
+//! The layered glTF materials' extensions, `KHR_materials_clearcoat`, `_sheen`, `_iridescence` and
+//! `_diffuse_transmission`, read from their
 //! raw JSON (the gltf crate does not know them): factors checked against the ranges the extensions give, textures
 //! against the file's, each error naming the extension and the property.
-use super::material::{Clearcoat, Sheen, TextureRef, UvTransform};
+use super::material::{Clearcoat, DiffuseTransmission, Iridescence, Sheen, TextureRef, UvTransform};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
 use serde_json::Value;
 
 pub(super) const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub(super) const SHEEN: &str = "KHR_materials_sheen";
+pub(super) const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+pub(super) const IRIDESCENCE: &str = "KHR_materials_iridescence";
 
 /// A number property of an extension object in [0, 1], or `default` where absent.
 fn unit_factor(ext: &Value, key: &str, default: f32) -> Result<f32> {
@@ -69,24 +72,64 @@ pub(super) fn clearcoat(m: &gltf::Material<'_>, texture_count: usize) -> Result<
     }))
 }
 
+/// A colour property of an extension object, three numbers in [0, 1], or `default` where absent.
+fn color_factor(ext: &Value, key: &str, default: Vec3) -> Result<Vec3> {
+    let Some(v) = ext.get(key) else { return Ok(default) };
+    let channels: Option<Vec<f32>> =
+        v.as_array().map(|a| a.iter().filter_map(Value::as_f64).map(|x| x as f32).collect());
+    match channels.as_deref() {
+        Some(&[r, g, b]) if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Ok(Vec3::new(r, g, b)),
+        _ => bail!("\"{key}\" is {v}: it is three numbers in [0, 1]"),
+    }
+}
+
 /// `KHR_materials_sheen` of a material, if it has the extension.
 pub(super) fn sheen(m: &gltf::Material<'_>, texture_count: usize) -> Result<Option<Sheen>> {
     let Some(ext) = m.extension_value(SHEEN) else { return Ok(None) };
-    let color = match ext.get("sheenColorFactor") {
-        None => Vec3::ZERO,
-        Some(v) => {
-            let channels: Option<Vec<f32>> =
-                v.as_array().map(|a| a.iter().filter_map(Value::as_f64).map(|x| x as f32).collect());
-            match channels.as_deref() {
-                Some(&[r, g, b]) if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Vec3::new(r, g, b),
-                _ => bail!("\"sheenColorFactor\" is {v}: it is three numbers in [0, 1]"),
-            }
-        }
-    };
+    let color = color_factor(ext, "sheenColorFactor", Vec3::ZERO)?;
     Ok(Some(Sheen {
         color,
         color_texture: texture_info(ext, "sheenColorTexture", texture_count)?.map(|t| t.0),
         roughness: unit_factor(ext, "sheenRoughnessFactor", 0.0)?,
         roughness_texture: texture_info(ext, "sheenRoughnessTexture", texture_count)?.map(|t| t.0),
     }))
+}
+
+/// `KHR_materials_diffuse_transmission` of a material, if it has the extension.
+pub(super) fn diffuse_transmission(
+    m: &gltf::Material<'_>,
+    texture_count: usize,
+) -> Result<Option<DiffuseTransmission>> {
+    let Some(ext) = m.extension_value(DIFFUSE_TRANSMISSION) else { return Ok(None) };
+    Ok(Some(DiffuseTransmission {
+        factor: unit_factor(ext, "diffuseTransmissionFactor", 0.0)?,
+        texture: texture_info(ext, "diffuseTransmissionTexture", texture_count)?.map(|t| t.0),
+        color: color_factor(ext, "diffuseTransmissionColorFactor", Vec3::ONE)?,
+        color_texture: texture_info(ext, "diffuseTransmissionColorTexture", texture_count)?.map(|t| t.0),
+    }))
+}
+
+/// A number property of an extension object, at least `min`, or `default` where absent.
+fn number_at_least(ext: &Value, key: &str, min: f32, default: f32) -> Result<f32> {
+    let Some(value) = ext.get(key) else { return Ok(default) };
+    let x = value.as_f64().with_context(|| format!("\"{key}\" is {value}, not a number"))? as f32;
+    if !(x >= min && x.is_finite()) {
+        bail!("\"{key}\" is {x}: it is at least {min}");
+    }
+    Ok(x)
+}
+
+/// `KHR_materials_iridescence` of a material, if it has the extension.
+pub(super) fn iridescence(m: &gltf::Material<'_>, texture_count: usize) -> Result<Option<Iridescence>> {
+    let Some(ext) = m.extension_value(IRIDESCENCE) else { return Ok(None) };
+    let defaults = Iridescence::default();
+    let film = Iridescence {
+        factor: unit_factor(ext, "iridescenceFactor", 0.0)?,
+        texture: texture_info(ext, "iridescenceTexture", texture_count)?.map(|t| t.0),
+        ior: number_at_least(ext, "iridescenceIor", 1.0, defaults.ior)?,
+        thickness_min: number_at_least(ext, "iridescenceThicknessMinimum", 0.0, defaults.thickness_min)?,
+        thickness_max: number_at_least(ext, "iridescenceThicknessMaximum", 0.0, defaults.thickness_max)?,
+        thickness_texture: texture_info(ext, "iridescenceThicknessTexture", texture_count)?.map(|t| t.0),
+    };
+    Ok(Some(film))
 }

@@ -173,6 +173,10 @@ pub(super) fn warn_about_unread_uv_sets(scene: &mut Scene) {
             ("clearcoat normal", m.clearcoat.and_then(|c| c.normal_texture), 0),
             ("sheen colour", m.sheen.and_then(|s| s.color_texture), 1),
             ("sheen roughness", m.sheen.and_then(|s| s.roughness_texture), 1),
+            ("diffuse transmission", m.diffuse_transmission.and_then(|d| d.texture), 1),
+            ("iridescence", m.iridescence.and_then(|i| i.texture), 1),
+            ("iridescence thickness", m.iridescence.and_then(|i| i.thickness_texture), 1),
+            ("diffuse transmission colour", m.diffuse_transmission.and_then(|d| d.color_texture), 1),
         ];
         for (what, t, last_read) in uses {
             if let Some(t) = t.filter(|t| t.tex_coord > last_read) {
@@ -208,6 +212,10 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
         .with_context(|| format!("material \"{name}\": {}", gltf_layers::CLEARCOAT))?;
     let sheen = gltf_layers::sheen(&m, texture_count)
         .with_context(|| format!("material \"{name}\": {}", gltf_layers::SHEEN))?;
+    let iridescence = gltf_layers::iridescence(&m, texture_count)
+        .with_context(|| format!("material \"{name}\": {}", gltf_layers::IRIDESCENCE))?;
+    let diffuse_transmission = gltf_layers::diffuse_transmission(&m, texture_count)
+        .with_context(|| format!("material \"{name}\": {}", gltf_layers::DIFFUSE_TRANSMISSION))?;
     Ok(Material {
         name,
         base_color: Vec4::from_array(pbr.base_color_factor()),
@@ -253,18 +261,22 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
         dispersion,
         clearcoat,
         sheen,
+        diffuse_transmission,
+        iridescence,
         bump: None,
         unlit: m.unlit(),
     })
 }
 
-/// Base colour, emissive, specular colour and sheen colour textures hold sRGB-encoded colour; the rest hold linear
-/// data (glTF 2.0 §3.9, KHR_materials_specular, KHR_materials_sheen).
+/// Base colour, emissive, specular colour, sheen colour and diffuse transmission colour textures hold sRGB-encoded
+/// colour; the rest hold linear data (glTF 2.0 §3.9, KHR_materials_specular, _sheen, _diffuse_transmission).
 pub(super) fn mark_color_textures(scene: &mut Scene) {
     for m in &scene.materials {
         let sheen_color = m.sheen.and_then(|s| s.color_texture);
-        for t in [m.base_color_texture, m.emissive_texture, m.specular_color_texture, sheen_color].into_iter().flatten()
-        {
+        let transmitted_color = m.diffuse_transmission.and_then(|d| d.color_texture);
+        let colors =
+            [m.base_color_texture, m.emissive_texture, m.specular_color_texture, sheen_color, transmitted_color];
+        for t in colors.into_iter().flatten() {
             if let Some(texture) = scene.textures.get_mut(t.texture) {
                 texture.srgb = true;
             }

@@ -209,6 +209,59 @@ impl Default for Sheen {
     }
 }
 
+/// `KHR_materials_diffuse_transmission`: a share of the diffuse lobe passes through the surface to the other side,
+/// diffusely and tinted, as through a thin sheet of paper or a leaf (docs/architecture.md, "Layered materials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DiffuseTransmission {
+    /// The share of the diffuse lobe that transmits, 0 to 1.
+    pub factor: f32,
+    /// Its alpha channel scales `factor`.
+    pub texture: Option<TextureRef>,
+    /// Linear colour of the transmitted light.
+    pub color: Vec3,
+    /// sRGB; its RGB scales `color`.
+    pub color_texture: Option<TextureRef>,
+}
+
+impl Default for DiffuseTransmission {
+    /// The extension's defaults: nothing transmits; what would is white.
+    fn default() -> Self {
+        Self { factor: 0.0, texture: None, color: Vec3::ONE, color_texture: None }
+    }
+}
+
+/// `KHR_materials_iridescence`: a thin dielectric film over the base whose interference tints the specular
+/// reflection by view angle and thickness (Belcour and Barla 2017, "A Practical Extension to Microfacet Theory for
+/// the Modeling of Varying Iridescence"; docs/architecture.md, "Layered materials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Iridescence {
+    /// How much of the specular reflection the film's replaces, 0 to 1.
+    pub factor: f32,
+    /// Its R channel scales `factor`.
+    pub texture: Option<TextureRef>,
+    /// The film's index of refraction.
+    pub ior: f32,
+    /// The film's thickness in nanometres: `thickness_max` without a thickness texture, else between the two by
+    /// its G channel.
+    pub thickness_min: f32,
+    pub thickness_max: f32,
+    pub thickness_texture: Option<TextureRef>,
+}
+
+impl Default for Iridescence {
+    /// The extension's defaults: no film; where there is one, index 1.3 and 100 to 400 nm.
+    fn default() -> Self {
+        Self {
+            factor: 0.0,
+            texture: None,
+            ior: 1.3,
+            thickness_min: 100.0,
+            thickness_max: 400.0,
+            thickness_texture: None,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -254,6 +307,10 @@ pub struct Material {
     pub clearcoat: Option<Clearcoat>,
     /// `KHR_materials_sheen` (None: no sheen).
     pub sheen: Option<Sheen>,
+    /// `KHR_materials_diffuse_transmission` (None: the diffuse lobe only reflects).
+    pub diffuse_transmission: Option<DiffuseTransmission>,
+    /// `KHR_materials_iridescence` (None: no film).
+    pub iridescence: Option<Iridescence>,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
     /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
@@ -291,6 +348,8 @@ impl Default for Material {
             dispersion: 0.0,
             clearcoat: None,
             sheen: None,
+            diffuse_transmission: None,
+            iridescence: None,
             bump: None,
             unlit: false,
         }
@@ -302,13 +361,15 @@ impl Material {
         self.emissive.max_element() > 0.0
     }
 
-    /// Whether the material has a layer over its base (a clear coat or a sheen) that shading must evaluate where
-    /// its surface is seen: the G-buffer has no room for the layers' parameters, so the accumulation pass evaluates
-    /// such a surface at a ray hit (docs/architecture.md, "Layered materials").
+    /// Whether the material has a layer over its base (a clear coat, a sheen, a thin film) or diffuse transmission, which
+    /// shading must evaluate where its surface is seen: the G-buffer has no room for their parameters, so the
+    /// accumulation pass evaluates such a surface at a ray hit (docs/architecture.md, "Layered materials").
     pub fn is_layered(&self) -> bool {
         !self.unlit
             && (self.clearcoat.is_some_and(|c| c.factor > 0.0)
-                || self.sheen.is_some_and(|s| s.color.max_element() > 0.0))
+                || self.sheen.is_some_and(|s| s.color.max_element() > 0.0)
+                || self.diffuse_transmission.is_some_and(|d| d.factor > 0.0)
+                || self.iridescence.is_some_and(|i| i.factor > 0.0))
     }
 
     /// Whether the material refracts each colour channel by its own index: it transmits and disperses.

@@ -108,10 +108,10 @@ fn every_bad_input_gives_its_error() {
         (gltf_with(&dir, "points.gltf", |d| d["meshes"][0]["primitives"][0]["mode"] = json!(0)), "only TRIANGLES"),
         (
             gltf_with(&dir, "required-ext.gltf", |d| {
-                d["extensionsUsed"] = json!(["KHR_materials_iridescence"]);
-                d["extensionsRequired"] = json!(["KHR_materials_iridescence"]);
+                d["extensionsUsed"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
+                d["extensionsRequired"] = json!(["KHR_materials_pbrSpecularGlossiness"]);
             }),
-            "requires extension(s) strata does not implement: KHR_materials_iridescence",
+            "requires extension(s) strata does not implement: KHR_materials_pbrSpecularGlossiness",
         ),
         (
             gltf_with(&dir, "parent-dir.gltf", |d| d["buffers"][0]["uri"] = json!("../secret.bin")),
