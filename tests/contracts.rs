@@ -84,7 +84,7 @@ fn material_offsets() -> Vec<(&'static str, usize)> {
         clearcoat_uv_rows, clearcoat_roughness_uv_rows, clearcoat_normal_uv_rows, sheen_color_uv_rows,
         sheen_roughness_uv_rows, diffuse_transmission, diffuse_transmission_uv_rows,
         diffuse_transmission_color_uv_rows, iridescence, iridescence_texture, iridescence_thickness_texture, pad1,
-        iridescence_uv_rows, iridescence_thickness_uv_rows);
+        iridescence_uv_rows, iridescence_thickness_uv_rows, anisotropy, anisotropy_texture, pad2, anisotropy_uv_rows);
     v
 }
 

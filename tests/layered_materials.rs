@@ -13,8 +13,8 @@ use common::GpuTest;
 use glam::{Vec3, Vec4};
 use strata::render::frame::{render_frame, DirectLight, FrameOptions, RenderedFrame};
 use strata::scene::environment::Environment;
-use strata::scene::settings::{RenderSettings, SamplerKind};
-use strata::scene::{Clearcoat, DiffuseTransmission, Iridescence, Material, Scene, Sheen};
+use strata::scene::settings::{RenderSettings, SamplerKind, Trace};
+use strata::scene::{Anisotropy, Clearcoat, DiffuseTransmission, Iridescence, Material, Scene, Sheen};
 
 /// A unit sphere at the origin, seen from this far with a 30° vertical field of view (the grazing silhouette in view).
 const DISTANCE: f32 = 5.0;
@@ -97,8 +97,21 @@ fn band_error(frame: &RenderedFrame, (lo, hi): (f32, f32), expected: impl Fn(f32
 
 const BANDS: [(f32, f32); 3] = [(0.75, 1.0), (0.35, 0.75), (0.12, 0.35)];
 
+/// The furnace frames: paths with diffuse interreflection, traced one way (ray queries where the device has them),
+/// so that every layered test shares one pipeline to compile; the clear coat's test traces both ways and holds them
+/// to the same bits (`both_ways`).
 fn furnace_settings(size: u32, spp: u32) -> RenderSettings {
-    RenderSettings { indirect: true, bounces: 8, ..settings(size, size, spp, SamplerKind::MultiJittered) }
+    RenderSettings {
+        indirect: true,
+        bounces: 8,
+        trace: Trace::Query,
+        ..settings(size, size, spp, SamplerKind::MultiJittered)
+    }
+}
+
+/// `s` traced every way the device can (common::scenes::render then requires the same bits from each).
+fn both_ways(s: RenderSettings) -> RenderSettings {
+    RenderSettings { trace: Trace::Auto, ..s }
 }
 
 /// Checks every band of `frame` against `expected(μ)`: within four standard errors of its mean plus `slack` (the
@@ -114,6 +127,7 @@ fn assert_bands(frame: &RenderedFrame, what: &str, slack: f64, max_pixel: f64, e
 
 /// A clear coat over a black base reflects the coat's directional albedo F0·E₁ + (1 − F0)·E₅ (F0 0.04) at each
 /// view cosine, through gloss rays and light samples; over a white base the coat and the base under it reflect 1.
+/// Traced both ways (ray queries and a ray-tracing pipeline), which must give the same bits.
 #[test]
 fn a_clear_coat_reflects_its_albedo_over_black_and_with_a_white_base_exactly_what_arrives() {
     let gpu = GpuTest::new();
@@ -121,14 +135,14 @@ fn a_clear_coat_reflects_its_albedo_over_black_and_with_a_white_base_exactly_wha
     for roughness in [0.1f32, 0.5] {
         let coat = Clearcoat { factor: 1.0, roughness, ..Default::default() };
         let black = furnace(Material { clearcoat: Some(coat), ..base(false) });
-        let frame = render(gpu.device(), &black, &furnace_settings(size, 64));
+        let frame = render(gpu.device(), &black, &both_ways(furnace_settings(size, 64)));
         let coat_albedo = |mu: f32| {
             let [e1, e5] = strata::math::brdf::lookup(mu, roughness);
             0.04 * e1 + 0.96 * e5
         };
         assert_bands(&frame, &format!("coat {roughness} over black"), 0.004, 1.0, coat_albedo);
         let white = furnace(Material { clearcoat: Some(coat), ..base(true) });
-        let frame = render(gpu.device(), &white, &furnace_settings(size, 64));
+        let frame = render(gpu.device(), &white, &both_ways(furnace_settings(size, 64)));
         assert_bands(&frame, &format!("coat {roughness} over white"), 0.004, 1.2, |_| 1.0);
     }
     gpu.finish().unwrap();
@@ -218,7 +232,13 @@ fn a_thin_film_of_no_thickness_is_no_film_and_a_thicker_one_recolours_as_its_twi
         scene.environment = Some(Environment::uniform(Vec3::ONE));
         // Light samples alone (no chain, so no Russian roulette whose survival would follow the film's colour):
         // every sample of the three renders is the same but for the film's factor, so their ratio is the film's.
-        let s = RenderSettings { primary: Primary::Rays, bounces: 0, ..settings(8, 8, 16, SamplerKind::MultiJittered) };
+        // One way to trace (the furnace tests hold both to the same bits with layers): a variant of its own to compile.
+        let s = RenderSettings {
+            primary: Primary::Rays,
+            bounces: 0,
+            trace: Trace::Query,
+            ..settings(8, 8, 16, SamplerKind::MultiJittered)
+        };
         let frame = render(gpu.device(), &scene, &s);
         frame.linear.pixels.iter().map(|p| Vec3::from_slice(&p[..3])).sum::<Vec3>() / frame.linear.pixels.len() as f32
     };
@@ -239,6 +259,90 @@ fn a_thin_film_of_no_thickness_is_no_film_and_a_thicker_one_recolours_as_its_twi
     };
     let frame = render(gpu.device(), &furnace(white), &furnace_settings(64, 64));
     assert_bands(&frame, "white dielectric under a 400 nm film", 0.004, 1.3, |_| 1.0);
+    gpu.finish().unwrap();
+}
+
+/// KHR_materials_anisotropy: a point light's highlight on a glossy metal floor seen straight down is round for an
+/// isotropic lobe and stretched along the anisotropy direction for a strong one (the floor's u direction, image x;
+/// turned a quarter by the rotation, image y): the highlight's spread along each image axis (the square root of its
+/// second moment), light samples alone from a point light, so the only noise is the pixel jitter. A white
+/// anisotropic dielectric in a white furnace makes no energy: its diffuse base takes what the isotropic lobe of the
+/// same roughness leaves, which reflects at least as much as the stretched one, so it loses at most what separates
+/// that lobe from an isotropic one as rough as the stretched axis.
+#[test]
+fn an_anisotropic_lobe_stretches_its_highlight_along_its_direction_and_makes_no_energy() {
+    use strata::scene::library::place;
+    use strata::scene::{Light, LightShape};
+    let gpu = GpuTest::new();
+    let size = 48u32;
+    let spread = |anisotropy: Option<Anisotropy>| {
+        let mut scene = Scene::default();
+        scene.materials.push(Material {
+            base_color: Vec4::ONE,
+            metallic: 1.0,
+            roughness: 0.25,
+            anisotropy,
+            ..Default::default()
+        });
+        let (plane, at) = plane_at(glam::Vec2::splat(4.0), Vec3::ZERO, false, 0);
+        place(&mut scene, "floor", plane, at);
+        scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, 0.8));
+        scene.lights.push(Light {
+            name: "point".into(),
+            shape: LightShape::Point { radius: 0.0 },
+            emission: Vec3::splat(1.0),
+            world_from_light: glam::Mat4::from_translation(Vec3::new(0.0, 1.0, 0.0)),
+            node: None,
+            range: 0.0,
+        });
+        // One way to trace, as the film's test: a variant of its own to compile.
+        let s =
+            RenderSettings { bounces: 0, trace: Trace::Query, ..settings(size, size, 16, SamplerKind::MultiJittered) };
+        let frame = render(gpu.device(), &scene, &s);
+        let (mut sum, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
+        for y in 0..size {
+            for x in 0..size {
+                let w = f64::from(frame.linear.pixel(x, y)[1]);
+                let (dx, dy) = (f64::from(x) + 0.5 - f64::from(size) / 2.0, f64::from(y) + 0.5 - f64::from(size) / 2.0);
+                sum += w;
+                sx += w * dx * dx;
+                sy += w * dy * dy;
+            }
+        }
+        ((sx / sum).sqrt(), (sy / sum).sqrt())
+    };
+    let (round_x, round_y) = spread(None);
+    let along_u = spread(Some(Anisotropy { strength: 0.9, ..Default::default() }));
+    let turned =
+        spread(Some(Anisotropy { strength: 0.9, rotation: std::f32::consts::FRAC_PI_2, ..Default::default() }));
+    eprintln!("highlight spread (x, y) in pixels: isotropic ({round_x:.2}, {round_y:.2}), along u {along_u:.2?}, turned {turned:.2?}");
+    assert!((round_x / round_y - 1.0).abs() < 0.05, "an isotropic highlight is round: {round_x} × {round_y}");
+    assert!(along_u.0 > 1.5 * along_u.1, "stretched along image x: {along_u:?}");
+    assert!(turned.1 > 1.5 * turned.0, "turned a quarter, stretched along image y: {turned:?}");
+    assert!((along_u.0 / turned.1 - 1.0).abs() < 0.05, "the same stretch either way: {along_u:?} {turned:?}");
+
+    let white = Material {
+        anisotropy: Some(Anisotropy { strength: 0.8, rotation: 0.5, ..Default::default() }),
+        roughness: 0.3,
+        specular: 1.0,
+        ..base(true)
+    };
+    let frame = render(gpu.device(), &furnace(white), &furnace_settings(64, 64));
+    // The loss is at most what separates the isotropic lobe at α from the isotropic lobe as rough as the stretched
+    // axis, mix(α, 1, strength²): the stretched lobe reflects between the two.
+    let albedo = |mu: f32, roughness: f32| {
+        let [e1, e5] = strata::math::brdf::lookup(mu, roughness);
+        0.04 * e1 + 0.96 * e5
+    };
+    let rough_axis = (0.09f32 + 0.91 * 0.64).sqrt();
+    let least = |mu: f32| 1.0 - (albedo(mu, 0.3) - albedo(mu, rough_axis));
+    for band in BANDS {
+        let (above_one, se, _) = band_error(&frame, band, |_| 1.0);
+        let (above_least, _, _) = band_error(&frame, band, least);
+        eprintln!("white anisotropic dielectric, view cosines {band:?}: {above_one:+.4} ± {se:.4} from 1, {above_least:+.4} from the least");
+        assert!(above_one <= 4.0 * se + 0.004, "view cosines {band:?}: {above_one} ± {se} above 1");
+        assert!(above_least >= -(4.0 * se + 0.004), "view cosines {band:?}: {above_least} ± {se} below the least");
+    }
     gpu.finish().unwrap();
 }
 
@@ -336,6 +440,7 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
         sheen: Some(sheen),
         diffuse_transmission: Some(transmits),
         iridescence: Some(film),
+        anisotropy: Some(Anisotropy { strength: 0.6, rotation: 1.25, ..Default::default() }),
         ..base(true)
     };
     let mut scene = furnace(layered);
@@ -347,6 +452,10 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
     assert_eq!(loaded.materials[0].sheen, Some(sheen));
     assert_eq!(loaded.materials[0].diffuse_transmission, Some(transmits));
     assert_eq!(loaded.materials[0].iridescence, Some(film));
+    assert_eq!(
+        loaded.materials[0].anisotropy,
+        Some(Anisotropy { strength: 0.6, rotation: 1.25, ..Default::default() })
+    );
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
 
     let original: Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
@@ -386,7 +495,7 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
     assert_eq!((thickness.texture, thickness.tex_coord), (1, 1));
 
     type Edit<'a> = &'a dyn Fn(&mut Value);
-    let failures: [(&str, Edit); 6] = [
+    let failures: [(&str, Edit); 7] = [
         ("\"clearcoatFactor\" is 1.5", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_clearcoat"]["clearcoatFactor"] = json!(1.5)
         }),
@@ -403,6 +512,9 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
         ("\"iridescenceIor\" is 0.5: it is at least 1", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_iridescence"]["iridescenceIor"] = json!(0.5)
         }),
+        ("\"anisotropyStrength\" is 2: it lies in [0, 1]", &|doc| {
+            doc["materials"][0]["extensions"]["KHR_materials_anisotropy"]["anisotropyStrength"] = json!(2)
+        }),
         ("\"sheenColorTexture\" names texture 5; the file has 2", &|doc| {
             doc["materials"][0]["extensions"]["KHR_materials_sheen"]["sheenColorTexture"] = json!({"index": 5})
         }),
@@ -411,6 +523,8 @@ fn layered_materials_load_from_gltf_and_bad_ones_name_what_is_wrong() {
         let error = format!("{:#}", with(edit).unwrap_err());
         let extension = if says.contains("sheen") {
             "KHR_materials_sheen"
+        } else if says.contains("anisotropy") {
+            "KHR_materials_anisotropy"
         } else if says.contains("iridescence") {
             "KHR_materials_iridescence"
         } else if says.contains("diffuseTransmission") {

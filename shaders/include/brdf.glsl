@@ -39,6 +39,11 @@ struct Shading {
     float iridescence_thickness;
     vec3 film_dielectric;
     vec3 film_metal;
+    // KHR_materials_anisotropy: the strength (× texture; 0: an isotropic lobe, and always 0 in a pipeline without
+    // layers, surface.glsl's face_viewer) and the direction the lobe stretches along (world space, in the tangent
+    // plane up to the shading normal's tilt).
+    float anisotropy;
+    vec3 anisotropy_direction;
 };
 
 float luminance(vec3 c) {
@@ -87,6 +92,54 @@ vec3 dielectric_f0(Shading m) {
     return min(vec3(r * r) * m.specular_color, vec3(1.0)) * m.specular;
 }
 
+// The anisotropic GGX lobe (KHR_materials_anisotropy; Heitz 2014, "Understanding the Masking-Shadowing Function in
+// Microfacet-Based BRDFs", §5.3): roughness a.x along the lobe frame's first axis, a.y along its second; vectors in
+// that frame (z the normal). Each reduces to its isotropic twin above where a.x = a.y.
+float ggx_d_aniso(vec3 h, vec2 a) {
+    float a2 = a.x * a.y;
+    vec3 f = vec3(a.y * h.x, a.x * h.y, a2 * h.z);
+    float w2 = a2 / dot(f, f);
+    return a2 * w2 * w2 / PI;
+}
+
+float smith_g1_aniso(vec3 w, vec2 a) {
+    return 2.0 * w.z / (w.z + length(vec3(a.x * w.x, a.y * w.y, w.z)));
+}
+
+float smith_visibility_aniso(vec3 l, vec3 v, vec2 a) {
+    float gv = l.z * length(vec3(a.x * v.x, a.y * v.y, v.z));
+    float gl = v.z * length(vec3(a.x * l.x, a.y * l.y, l.z));
+    float d = gv + gl;
+    return d > 0.0 ? 0.5 / d : 0.0;
+}
+
+bool anisotropic(Shading m) {
+    return m.anisotropy > 0.0;
+}
+
+// The extension's roughness along the direction, mix(α, 1, strength²), and across it, α.
+vec2 lobe_alphas(Shading m) {
+    float a = ggx_alpha(m.roughness);
+    return vec2(mix(a, 1.0, m.anisotropy * m.anisotropy), a);
+}
+
+// The anisotropic lobe's frame about n: the direction made perpendicular to n, then n × it (make_basis where the
+// direction is along n).
+void lobe_frame(Shading m, vec3 n, out vec3 t, out vec3 b) {
+    vec3 d = m.anisotropy_direction - n * dot(n, m.anisotropy_direction);
+    float len = length(d);
+    if (!(len > 1e-6)) {
+        make_basis(n, t, b);
+        return;
+    }
+    t = d / len;
+    b = cross(n, t);
+}
+
+vec3 to_lobe(vec3 w, vec3 t, vec3 b, vec3 n) {
+    return vec3(dot(w, t), dot(w, b), dot(w, n));
+}
+
 // The material's Fresnel reflectance at v·h (Schlick), glTF 2.0 Appendix B: the dielectric's (F0 from the
 // IOR, tinted by the specular colour and kept at most 1, F0 and F90 scaled by the specular factor:
 // KHR_materials_specular) and the metal's (F0 the base colour), mixed by metalness. `base_share` is what the
@@ -127,6 +180,15 @@ void brdf_cos(Shading m, vec3 n, vec3 v, vec3 l, out vec3 diffuse, out vec3 spec
     // Seen from below the shading normal (a bumped or interpolated normal turned away from the viewer) the
     // specular lobe reflects nothing, as sample_specular finds: light sampling and gloss rays agree.
     if (nv <= 0.0) return;
+    if (anisotropic(m)) {
+        vec3 t;
+        vec3 b;
+        lobe_frame(m, n, t, b);
+        vec2 a2 = lobe_alphas(m);
+        specular = f * ggx_d_aniso(to_lobe(h, t, b, n), a2) *
+                   smith_visibility_aniso(to_lobe(l, t, b, n), to_lobe(v, t, b, n), a2) * nl;
+        return;
+    }
     float a = ggx_alpha(m.roughness);
     specular = f * ggx_d(max(dot(n, h), 0.0), a) * smith_visibility(nl, nv, a) * nl;
 }
@@ -155,8 +217,16 @@ float specular_pdf(Shading m, vec3 n, vec3 v, vec3 l) {
     float nv = dot(n, v);
     if (nv <= 0.0 || dot(n, l) <= 0.0) return 0.0;
     vec3 h = normalize(l + v);
-    float a = ggx_alpha(m.roughness);
     float vh = max(dot(v, h), 0.0);
+    if (anisotropic(m)) {
+        vec3 t;
+        vec3 b;
+        lobe_frame(m, n, t, b);
+        vec2 a2 = lobe_alphas(m);
+        return smith_g1_aniso(to_lobe(v, t, b, n), a2) * ggx_d_aniso(to_lobe(h, t, b, n), a2) / (4.0 * nv) *
+               reflect_probability(m, vh);
+    }
+    float a = ggx_alpha(m.roughness);
     return smith_g1(nv, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * nv) * reflect_probability(m, vh);
 }
 
@@ -177,9 +247,10 @@ float power_heuristic(float a, float b) {
     return a2 + b2 > 0.0 ? a2 / (a2 + b2) : 0.0;
 }
 
-// A GGX visible normal for view ve in tangent space (z = normal), from u in [0,1)² (Heitz 2018, Listing 1).
-vec3 sample_ggx_vndf(vec3 ve, float a, vec2 u) {
-    vec3 vh = normalize(vec3(a * ve.x, a * ve.y, ve.z));
+// A GGX visible normal for view ve in tangent space (z = normal), from u in [0,1)², with roughness a.x along the
+// frame's x and a.y along its y (Heitz 2018, Listing 1, written for both).
+vec3 sample_ggx_vndf_aniso(vec3 ve, vec2 a, vec2 u) {
+    vec3 vh = normalize(vec3(a.x * ve.x, a.y * ve.y, ve.z));
     float lensq = vh.x * vh.x + vh.y * vh.y;
     vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
     vec3 t2 = cross(vh, t1);
@@ -190,9 +261,13 @@ vec3 sample_ggx_vndf(vec3 ve, float a, vec2 u) {
     float s = 0.5 * (1.0 + vh.z);
     p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
     vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3(a * nh.x, a * nh.y, max(nh.z, 0.0)));
+    return normalize(vec3(a.x * nh.x, a.y * nh.y, max(nh.z, 0.0)));
 }
 
+// The same for an isotropic lobe of roughness a.
+vec3 sample_ggx_vndf(vec3 ve, float a, vec2 u) {
+    return sample_ggx_vndf_aniso(ve, vec2(a), u);
+}
 // The specular continuation of a path at a surface: a direction around the ideal reflection (gloss) or
 // refraction (translucency), chosen by their Fresnel weights, and the throughput weight of VNDF sampling
 // (F·G2/G1(v) for reflection, the transmitted share·G1(l) for refraction). `inside`: v is inside the material (refraction leaves it). False when the path ends here.
@@ -205,11 +280,13 @@ bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lob
     pdf = 0.0;
     vec3 t;
     vec3 b;
-    make_basis(n, t, b);
+    bool stretched = anisotropic(m);
+    if (stretched) lobe_frame(m, n, t, b); else make_basis(n, t, b);
     vec3 ve = vec3(dot(v, t), dot(v, b), dot(v, n));
     if (ve.z <= 0.0) return false;
     float a = ggx_alpha(m.roughness);
-    vec3 he = sample_ggx_vndf(ve, a, u);
+    vec2 a2 = lobe_alphas(m);
+    vec3 he = stretched ? sample_ggx_vndf_aniso(ve, a2, u) : sample_ggx_vndf(ve, a, u);
     vec3 h = normalize(t * he.x + b * he.y + n * he.z);
     float vh = max(dot(v, h), 0.0);
     float base_share;
@@ -225,6 +302,13 @@ bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lob
         if (nl <= 0.0) return false;
         // f·cos / pdf = F · G2(v, l) / G1(v), with brdf_cos's height-correlated G2 = 4 n·l n·v V: the BRDF
         // the rays sample is the one light sampling evaluates (the separable G1(l) would be darker at grazing).
+        if (stretched) {
+            vec3 le = to_lobe(wi, t, b, n);
+            float g1 = smith_g1_aniso(ve, a2);
+            weight = reflect_weight / p_reflect * (4.0 * nl * ve.z * smith_visibility_aniso(le, ve, a2) / g1);
+            pdf = g1 * ggx_d_aniso(he, a2) / (4.0 * ve.z) * p_reflect;
+            return true;
+        }
         weight = reflect_weight / p_reflect * (4.0 * nl * ve.z * smith_visibility(nl, ve.z, a) / smith_g1(ve.z, a));
         pdf = smith_g1(ve.z, a) * ggx_d(max(dot(n, h), 0.0), a) / (4.0 * ve.z) * p_reflect;
         return true;
@@ -236,12 +320,12 @@ bool sample_specular(Shading m, vec3 n, vec3 v, bool inside, vec2 u, float u_lob
         wi = reflect(-v, h);
         float nl = dot(n, wi);
         if (nl <= 0.0) return false;
-        weight = transmit_weight / (1.0 - p_reflect) * smith_g1(nl, a);
+        weight = transmit_weight / (1.0 - p_reflect) * (stretched ? smith_g1_aniso(to_lobe(wi, t, b, n), a2) : smith_g1(nl, a));
         return true;
     }
     float nl = -dot(n, wi);
     if (nl <= 0.0) return false;
-    weight = transmit_weight / (1.0 - p_reflect) * smith_g1(nl, a);
+    weight = transmit_weight / (1.0 - p_reflect) * (stretched ? smith_g1_aniso(-to_lobe(wi, t, b, n), a2) : smith_g1(nl, a));
     return true;
 }
 #endif

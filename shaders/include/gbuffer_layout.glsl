@@ -73,6 +73,10 @@ struct GpuMaterial {
     int pad1[2];
     vec4 iridescence_uv_rows[2];
     vec4 iridescence_thickness_uv_rows[2];
+    vec4 anisotropy;         // KHR_materials_anisotropy: x strength (0: isotropic), y, z the rotation's cos and sin
+    int anisotropy_texture;  // RG a tangent-space direction, B scales the strength
+    int pad2[3];
+    vec4 anisotropy_uv_rows[2];
 };
 
 // A material's KHR_texture_transform, stored as the first two rows of a 3x3 matrix, applied to a UV.

@@ -43,7 +43,32 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
     s.iridescence_thickness = 0.0;
     s.film_dielectric = vec3(1.0);
     s.film_metal = vec3(1.0);
+    s.anisotropy = 0.0;
+    s.anisotropy_direction = vec3(0.0);
     if (m.clearcoat.w == 0.0) return;
+    s.anisotropy = m.anisotropy.x;
+    if (s.anisotropy > 0.0) {
+        // The direction in the tangent frame of TEXCOORD_0 (T along ∂p/∂u, B = ±n × T with the UVs' orientation,
+        // as normal textures take it), rotated by the extension's rotation; the texture's RG a direction, its B a
+        // factor on the strength.
+        vec2 direction = vec2(1.0, 0.0);
+        if (m.anisotropy_texture >= 0) {
+            vec3 texel = material_texture(m.anisotropy_texture, transform_uv(m.anisotropy_uv_rows, uv0),
+                                          m.anisotropy_uv_rows, footprint_lod).rgb;
+            direction = texel.rg * 2.0 - 1.0;
+            s.anisotropy *= texel.b;
+        }
+        direction = mat2(m.anisotropy.y, m.anisotropy.z, -m.anisotropy.z, m.anisotropy.y) * direction;
+        vec3 t = dpdu - n_vertex * dot(n_vertex, dpdu);
+        float t_len = length(t);
+        if (t_len > 1e-12) {
+            t /= t_len;
+            vec3 b = cross(n_vertex, t) * (dot(cross(dpdu, dpdv), n_vertex) < 0.0 ? -1.0 : 1.0);
+            s.anisotropy_direction = t * direction.x + b * direction.y;
+        } else {
+            s.anisotropy = 0.0;  // no tangent frame to stretch along
+        }
+    }
     s.iridescence = m.iridescence.x;
     if (m.iridescence_texture >= 0) {
         s.iridescence *= material_texture(m.iridescence_texture, texture_uv(m.iridescence_uv_rows, uv0, uv1),

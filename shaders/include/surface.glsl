@@ -28,6 +28,9 @@ void face_viewer(inout Surface s, vec3 v, GpuMaterial m) {
         s.m.clearcoat_normal = -s.m.clearcoat_normal;
     }
     if (LAYERS != 0u) set_film(s.m, dot(s.normal, v));
+    // brdf.glsl cannot see LAYERS: without layers the lobe is isotropic as a constant, so none of its anisotropic
+    // code is compiled.
+    if (LAYERS == 0u) s.m.anisotropy = 0.0;
     s.m.diffuse_share = diffuse_share_from(s.m, specular_albedo_terms(dot(s.normal, v), s.m.roughness));
     if (LAYERS != 0u) set_layer_shares(s.m, s.normal, v);
     s.absorption = m.absorption.rgb;
@@ -66,6 +69,7 @@ Surface gbuffer_surface(ivec2 p, uvec4 ids, vec3 v) {
     s.m.iridescence = 0.0;
     s.m.film_dielectric = vec3(1.0);
     s.m.film_metal = vec3(1.0);
+    s.m.anisotropy = 0.0;
     face_viewer(s, v, materials[t.material]);
     return s;
 }
@@ -104,7 +108,8 @@ Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
     vec2 lod = vec2(footprint_lod(cone_width, ng, v, uv_area.z), footprint_lod(cone_width, ng, v, uv1_area.z));
     vec3 dpdu = vec3(0.0);
     vec3 dpdv = vec3(0.0);
-    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE || (LAYERS != 0u && m.clearcoat_normal_texture >= 0)) {
+    bool layer_frame = LAYERS != 0u && (m.clearcoat_normal_texture >= 0 || m.anisotropy.x > 0.0);
+    if (m.normal_texture >= 0 || m.bump.kind != BUMP_NONE || layer_frame) {
         // Tangent vectors transform with the object matrix (gbuffer.vert).
         Vec3Array dpdus = Vec3Array(h.r.dpdu);
         Vec3Array dpdvs = Vec3Array(h.r.dpdv);

@@ -222,6 +222,12 @@ pub struct GpuMaterial {
     pub pad1: [i32; 2],
     pub iridescence_uv_rows: [Vec4; 2],
     pub iridescence_thickness_uv_rows: [Vec4; 2],
+    /// KHR_materials_anisotropy: x the strength (0: isotropic), y and z the rotation's cosine and sine, w unused.
+    pub anisotropy: Vec4,
+    /// RG a tangent-space direction, B scales the strength.
+    pub anisotropy_texture: i32,
+    pub pad2: [i32; 3],
+    pub anisotropy_uv_rows: [Vec4; 2],
 }
 
 impl GpuMaterial {
@@ -244,6 +250,7 @@ impl GpuMaterial {
         let sheen = m.sheen.filter(|_| !m.unlit).unwrap_or_default();
         let transmits = m.diffuse_transmission.filter(|_| !m.unlit).unwrap_or_default();
         let film = m.iridescence.filter(|_| !m.unlit).unwrap_or_default();
+        let stretch = m.anisotropy.filter(|_| !m.unlit).unwrap_or_default();
         let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
             AlphaMode::Opaque => (c::ALPHA_OPAQUE, 0.0),
             AlphaMode::Mask { cutoff } => (c::ALPHA_MASK, cutoff),
@@ -313,6 +320,11 @@ impl GpuMaterial {
             pad1: [0; 2],
             iridescence_uv_rows: uv_rows(film.texture),
             iridescence_thickness_uv_rows: uv_rows(film.thickness_texture),
+            anisotropy: Vec4::new(stretch.strength, stretch.rotation.cos(), stretch.rotation.sin(), 0.0),
+            anisotropy_texture: texture(stretch.texture),
+            pad2: [0; 3],
+            // Its directions live in the tangent frame of TEXCOORD_0, which it reads as normal textures do.
+            anisotropy_uv_rows: uv_rows(stretch.texture.map(|t| crate::scene::TextureRef { tex_coord: 0, ..t })),
         }
     }
 }
@@ -371,7 +383,9 @@ mod tests {
         assert_eq!(offset_of!(GpuMaterial, iridescence), 688);
         assert_eq!(offset_of!(GpuMaterial, iridescence_texture), 704);
         assert_eq!(offset_of!(GpuMaterial, iridescence_thickness_uv_rows), 752);
-        assert_eq!(size_of::<GpuMaterial>(), 784);
+        assert_eq!(offset_of!(GpuMaterial, anisotropy), 784);
+        assert_eq!(offset_of!(GpuMaterial, anisotropy_uv_rows), 816);
+        assert_eq!(size_of::<GpuMaterial>(), 848);
     }
 
     #[test]

@@ -179,6 +179,14 @@ fn material_json(m: &super::Material) -> Result<(Value, Vec<&'static str>)> {
         extensions.insert("KHR_materials_sheen".into(), layer);
         used.push("KHR_materials_sheen");
     }
+    if let Some(a) = m.anisotropy {
+        if a.texture.is_some() {
+            bail!("material {}: exporting textures is not supported", m.name);
+        }
+        let lobe = json!({"anisotropyStrength": a.strength, "anisotropyRotation": a.rotation});
+        extensions.insert("KHR_materials_anisotropy".into(), lobe);
+        used.push("KHR_materials_anisotropy");
+    }
     if let Some(i) = m.iridescence {
         if i.texture.is_some() || i.thickness_texture.is_some() {
             bail!("material {}: exporting textures is not supported", m.name);

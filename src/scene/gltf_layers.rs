@@ -1,8 +1,8 @@
-//! The layered glTF materials' extensions, `KHR_materials_clearcoat`, `_sheen`, `_iridescence` and
+//! The layered glTF materials' extensions, `KHR_materials_clearcoat`, `_sheen`, `_iridescence`, `_anisotropy` and
 //! `_diffuse_transmission`, read from their
 //! raw JSON (the gltf crate does not know them): factors checked against the ranges the extensions give, textures
 //! against the file's, each error naming the extension and the property.
-use super::material::{Clearcoat, DiffuseTransmission, Iridescence, Sheen, TextureRef, UvTransform};
+use super::material::{Anisotropy, Clearcoat, DiffuseTransmission, Iridescence, Sheen, TextureRef, UvTransform};
 use anyhow::{anyhow, bail, Context as _, Result};
 use glam::{Vec2, Vec3};
 use serde_json::Value;
@@ -11,6 +11,7 @@ pub(super) const CLEARCOAT: &str = "KHR_materials_clearcoat";
 pub(super) const SHEEN: &str = "KHR_materials_sheen";
 pub(super) const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
 pub(super) const IRIDESCENCE: &str = "KHR_materials_iridescence";
+pub(super) const ANISOTROPY: &str = "KHR_materials_anisotropy";
 
 /// A number property of an extension object in [0, 1], or `default` where absent.
 fn unit_factor(ext: &Value, key: &str, default: f32) -> Result<f32> {
@@ -132,4 +133,21 @@ pub(super) fn iridescence(m: &gltf::Material<'_>, texture_count: usize) -> Resul
         thickness_texture: texture_info(ext, "iridescenceThicknessTexture", texture_count)?.map(|t| t.0),
     };
     Ok(Some(film))
+}
+
+/// `KHR_materials_anisotropy` of a material, if it has the extension.
+pub(super) fn anisotropy(m: &gltf::Material<'_>, texture_count: usize) -> Result<Option<Anisotropy>> {
+    let Some(ext) = m.extension_value(ANISOTROPY) else { return Ok(None) };
+    let rotation = match ext.get("anisotropyRotation") {
+        None => 0.0,
+        Some(v) => match v.as_f64() {
+            Some(r) if r.is_finite() => r as f32,
+            _ => bail!("\"anisotropyRotation\" is {v}, not a number of radians"),
+        },
+    };
+    Ok(Some(Anisotropy {
+        strength: unit_factor(ext, "anisotropyStrength", 0.0)?,
+        rotation,
+        texture: texture_info(ext, "anisotropyTexture", texture_count)?.map(|t| t.0),
+    }))
 }

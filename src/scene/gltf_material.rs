@@ -175,6 +175,7 @@ pub(super) fn warn_about_unread_uv_sets(scene: &mut Scene) {
             ("sheen roughness", m.sheen.and_then(|s| s.roughness_texture), 1),
             ("diffuse transmission", m.diffuse_transmission.and_then(|d| d.texture), 1),
             ("iridescence", m.iridescence.and_then(|i| i.texture), 1),
+            ("anisotropy", m.anisotropy.and_then(|a| a.texture), 0),
             ("iridescence thickness", m.iridescence.and_then(|i| i.thickness_texture), 1),
             ("diffuse transmission colour", m.diffuse_transmission.and_then(|d| d.color_texture), 1),
         ];
@@ -212,6 +213,8 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
         .with_context(|| format!("material \"{name}\": {}", gltf_layers::CLEARCOAT))?;
     let sheen = gltf_layers::sheen(&m, texture_count)
         .with_context(|| format!("material \"{name}\": {}", gltf_layers::SHEEN))?;
+    let anisotropy = gltf_layers::anisotropy(&m, texture_count)
+        .with_context(|| format!("material \"{name}\": {}", gltf_layers::ANISOTROPY))?;
     let iridescence = gltf_layers::iridescence(&m, texture_count)
         .with_context(|| format!("material \"{name}\": {}", gltf_layers::IRIDESCENCE))?;
     let diffuse_transmission = gltf_layers::diffuse_transmission(&m, texture_count)
@@ -263,6 +266,7 @@ pub(super) fn material(m: gltf::Material<'_>, root: &gltf::json::Root) -> Result
         sheen,
         diffuse_transmission,
         iridescence,
+        anisotropy,
         bump: None,
         unlit: m.unlit(),
     })

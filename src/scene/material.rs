@@ -262,6 +262,25 @@ impl Default for Iridescence {
     }
 }
 
+/// `KHR_materials_anisotropy`: the specular lobe stretched along a direction in the surface's tangent plane, as
+/// brushed metal reflects (docs/architecture.md, "Layered materials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Anisotropy {
+    /// 0 (isotropic) to 1: the roughness along the direction is mix(α, 1, strength²), across it α.
+    pub strength: f32,
+    /// Radians, counter-clockwise from the tangent (TEXCOORD_0's u direction on the surface).
+    pub rotation: f32,
+    /// RG: a direction in tangent space ([0, 1] for [−1, 1]), rotated by `rotation`; B scales `strength`.
+    pub texture: Option<TextureRef>,
+}
+
+impl Default for Anisotropy {
+    /// The extension's defaults: isotropic, along the tangent.
+    fn default() -> Self {
+        Self { strength: 0.0, rotation: 0.0, texture: None }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -311,6 +330,8 @@ pub struct Material {
     pub diffuse_transmission: Option<DiffuseTransmission>,
     /// `KHR_materials_iridescence` (None: no film).
     pub iridescence: Option<Iridescence>,
+    /// `KHR_materials_anisotropy` (None: an isotropic specular lobe).
+    pub anisotropy: Option<Anisotropy>,
     /// Procedural bump mapping from the scene file.
     pub bump: Option<BumpMap>,
     /// `KHR_materials_unlit`: the surface shows its base colour (factor × texture × vertex colour) as radiance,
@@ -350,6 +371,7 @@ impl Default for Material {
             sheen: None,
             diffuse_transmission: None,
             iridescence: None,
+            anisotropy: None,
             bump: None,
             unlit: false,
         }
@@ -361,7 +383,8 @@ impl Material {
         self.emissive.max_element() > 0.0
     }
 
-    /// Whether the material has a layer over its base (a clear coat, a sheen, a thin film) or diffuse transmission, which
+    /// Whether the material has a layer over its base (a clear coat, a sheen, a thin film), diffuse transmission or
+    /// an anisotropic lobe, which
     /// shading must evaluate where its surface is seen: the G-buffer has no room for their parameters, so the
     /// accumulation pass evaluates such a surface at a ray hit (docs/architecture.md, "Layered materials").
     pub fn is_layered(&self) -> bool {
@@ -369,7 +392,8 @@ impl Material {
             && (self.clearcoat.is_some_and(|c| c.factor > 0.0)
                 || self.sheen.is_some_and(|s| s.color.max_element() > 0.0)
                 || self.diffuse_transmission.is_some_and(|d| d.factor > 0.0)
-                || self.iridescence.is_some_and(|i| i.factor > 0.0))
+                || self.iridescence.is_some_and(|i| i.factor > 0.0)
+                || self.anisotropy.is_some_and(|a| a.strength > 0.0))
     }
 
     /// Whether the material refracts each colour channel by its own index: it transmits and disperses.

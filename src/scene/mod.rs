@@ -33,8 +33,8 @@ pub use camera::{Camera, Projection};
 use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
 pub use light::{Light, LightShape};
 pub use material::{
-    AlphaMode, BumpDerivative, BumpMap, Clearcoat, DiffuseTransmission, Iridescence, Material, MipFilter, NoiseKind,
-    Sampler, Sheen, Texture, TextureImage, TextureRef, UvTransform, Wrap,
+    AlphaMode, Anisotropy, BumpDerivative, BumpMap, Clearcoat, DiffuseTransmission, Iridescence, Material, MipFilter,
+    NoiseKind, Sampler, Sheen, Texture, TextureImage, TextureRef, UvTransform, Wrap,
 };
 pub use motion::{NodeMotion, RigidMotion};
 use std::path::PathBuf;
