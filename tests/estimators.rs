@@ -491,7 +491,7 @@ fn estimators_agree_on_layered_materials() {
             let below = facing(Vec3::new(0.5, -0.6, -0.5), Vec3::Y);
             analytic_light(&mut scene, LightShape::Quad { size: Vec2::splat(0.8) }, 4.0, below);
         }
-        for (indirect, bounces) in [(false, 0), (false, 3), (true, 2)] {
+        for (indirect, bounces) in [(false, 0), (true, 2)] {
             let label = format!("{name}, {}--bounces {bounces}", if indirect { "--indirect " } else { "" });
             cases.push((label, scene.clone(), comparison_settings(64, indirect, bounces)));
         }
@@ -502,8 +502,8 @@ fn estimators_agree_on_layered_materials() {
 
 /// The G-buffer has no room for the layers' parameters, so where a layered material is seen the accumulation pass
 /// meets the G-buffer's surface again with a short ray and evaluates it at that hit (docs/architecture.md,
-/// "Layered materials"): region by region, a coated and sheened sphere filling the view under a quad light and the
-/// studio environment must shade as the reference mode's primary rays shade it.
+/// "Layered materials"): region by region, a coated and sheened sphere filling the view, seen from above under a quad light, must
+/// shade as the reference mode's primary rays shade it.
 #[test]
 fn a_layered_surface_shades_alike_from_the_gbuffer_and_from_primary_rays() {
     use strata::scene::{Clearcoat, Sheen};
@@ -523,10 +523,9 @@ fn a_layered_surface_shades_alike_from_the_gbuffer_and_from_primary_rays() {
         strata::scene::shapes::uv_sphere(0.35, 64, 32, Some(1)),
         Mat4::from_translation(center),
     );
-    scene.camera = Some(ortho_camera(look_at(center + Vec3::new(0.3, 0.2, 1.5), center, Vec3::Y), 0.22));
+    scene.camera = Some(ortho_camera(look_at(center + Vec3::new(0.2, 1.4, 0.8), center, Vec3::Y), 0.22));
     let light = facing(Vec3::new(0.0, 1.2, -1.0), Vec3::NEG_Y);
     analytic_light(&mut scene, LightShape::Quad { size: Vec2::splat(0.8) }, 4.0, light);
-    scene.environment = Some(strata::scene::environment::Environment::studio(128, 64));
     let on_gpu = SceneOnGpu::upload(gpu.device(), &scene).expect("upload");
     // Direct light alone (no chain code: a fifth of the compile), which is all the visible surface's own shading is.
     let rays = comparison_settings(64, false, 0);

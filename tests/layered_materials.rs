@@ -97,9 +97,9 @@ fn band_error(frame: &RenderedFrame, (lo, hi): (f32, f32), expected: impl Fn(f32
 
 const BANDS: [(f32, f32); 3] = [(0.75, 1.0), (0.35, 0.75), (0.12, 0.35)];
 
-/// The furnace frames: paths with diffuse interreflection, traced one way (ray queries where the device has them),
-/// so that every layered test shares one pipeline to compile; the clear coat's test traces both ways and holds them
-/// to the same bits (`both_ways`).
+/// The furnace frames: paths with diffuse interreflection, traced one way (ray queries), so that every layered test
+/// shares one pipeline to compile; the anisotropic highlight's test traces both ways and holds them to the same bits
+/// (`both_ways`), on the smallest layered pipeline.
 fn furnace_settings(size: u32, spp: u32) -> RenderSettings {
     RenderSettings {
         indirect: true,
@@ -127,7 +127,6 @@ fn assert_bands(frame: &RenderedFrame, what: &str, slack: f64, max_pixel: f64, e
 
 /// A clear coat over a black base reflects the coat's directional albedo F0·E₁ + (1 − F0)·E₅ (F0 0.04) at each
 /// view cosine, through gloss rays and light samples; over a white base the coat and the base under it reflect 1.
-/// Traced both ways (ray queries and a ray-tracing pipeline), which must give the same bits.
 #[test]
 fn a_clear_coat_reflects_its_albedo_over_black_and_with_a_white_base_exactly_what_arrives() {
     let gpu = GpuTest::new();
@@ -135,14 +134,14 @@ fn a_clear_coat_reflects_its_albedo_over_black_and_with_a_white_base_exactly_wha
     for roughness in [0.1f32, 0.5] {
         let coat = Clearcoat { factor: 1.0, roughness, ..Default::default() };
         let black = furnace(Material { clearcoat: Some(coat), ..base(false) });
-        let frame = render(gpu.device(), &black, &both_ways(furnace_settings(size, 64)));
+        let frame = render(gpu.device(), &black, &furnace_settings(size, 64));
         let coat_albedo = |mu: f32| {
             let [e1, e5] = strata::math::brdf::lookup(mu, roughness);
             0.04 * e1 + 0.96 * e5
         };
         assert_bands(&frame, &format!("coat {roughness} over black"), 0.004, 1.0, coat_albedo);
         let white = furnace(Material { clearcoat: Some(coat), ..base(true) });
-        let frame = render(gpu.device(), &white, &both_ways(furnace_settings(size, 64)));
+        let frame = render(gpu.device(), &white, &furnace_settings(size, 64));
         assert_bands(&frame, &format!("coat {roughness} over white"), 0.004, 1.2, |_| 1.0);
     }
     gpu.finish().unwrap();
@@ -215,8 +214,8 @@ fn diffuse_transmission_passes_its_share_through_and_makes_no_energy() {
 }
 
 /// KHR_materials_iridescence: a film of no thickness is no film (a glossy dielectric over black seen straight down
-/// in a uniform environment, traced as primary rays both ways), a 300 nm film recolours that reflection by the CPU
-/// twin's ratio at normal view (math::iridescence::film_ratio), and a white dielectric under a
+/// under a wide light, traced as primary rays), a 300 nm film recolours that reflection by the CPU twin's ratio at
+/// normal view (math::iridescence::film_ratio), and a white dielectric under a
 /// 400 nm film still reflects exactly what arrives in a white furnace (its diffuse base takes what the film leaves).
 #[test]
 fn a_thin_film_of_no_thickness_is_no_film_and_a_thicker_one_recolours_as_its_twin_says() {
@@ -229,10 +228,19 @@ fn a_thin_film_of_no_thickness_is_no_film_and_a_thicker_one_recolours_as_its_twi
         let (plane, at) = plane_at(glam::Vec2::splat(4.0), Vec3::ZERO, false, 0);
         place(&mut scene, "mirror", plane, at);
         scene.camera = Some(ortho_down(Vec3::ZERO, 2.0, 0.5));
-        scene.environment = Some(Environment::uniform(Vec3::ONE));
+        // A wide quad light overhead (primary rays do not see it), without an environment: the pipeline is the
+        // estimators' layered one (tests/estimators.rs), compiled once for both.
+        scene.lights.push(strata::scene::Light {
+            name: "sky panel".into(),
+            shape: strata::scene::LightShape::Quad { size: glam::Vec2::splat(20.0) },
+            emission: Vec3::ONE,
+            world_from_light: strata::check::optics::light_down(Vec3::new(0.0, 1.0, 0.0)),
+            node: None,
+            range: 0.0,
+        });
         // Light samples alone (no chain, so no Russian roulette whose survival would follow the film's colour):
         // every sample of the three renders is the same but for the film's factor, so their ratio is the film's.
-        // One way to trace (the furnace tests hold both to the same bits with layers): a variant of its own to compile.
+        // One way to trace (the anisotropic highlight's test holds both to the same bits with layers).
         let s = RenderSettings {
             primary: Primary::Rays,
             bounces: 0,
@@ -295,9 +303,9 @@ fn an_anisotropic_lobe_stretches_its_highlight_along_its_direction_and_makes_no_
             node: None,
             range: 0.0,
         });
-        // One way to trace, as the film's test: a variant of its own to compile.
-        let s =
-            RenderSettings { bounces: 0, trace: Trace::Query, ..settings(size, size, 16, SamplerKind::MultiJittered) };
+        // Both ways to trace, which must give the same bits (common::scenes::render): the layers' code is the
+        // shading body's, whichever way its rays are traced.
+        let s = both_ways(RenderSettings { bounces: 0, ..settings(size, size, 16, SamplerKind::MultiJittered) });
         let frame = render(gpu.device(), &scene, &s);
         let (mut sum, mut sx, mut sy) = (0.0f64, 0.0f64, 0.0f64);
         for y in 0..size {
