@@ -22,11 +22,17 @@ bool alpha_test_passes(GpuMaterial m, float alpha, float u) {
     return m.alpha_mode == ALPHA_MASK ? alpha >= m.alpha_cutoff : alpha > u;
 }
 
+// A layer texture's texel where the material has that texture (its channel scales a factor), else 1.
+vec4 layer_texel(int index, vec4 rows[2], vec2 uv0, vec2 uv1, vec2 footprint_lod) {
+    return index >= 0 ? material_texture(index, texture_uv(rows, uv0, uv1), rows, footprint_lod) : vec4(1.0);
+}
+
 // KHR_materials_clearcoat's, _sheen's, _iridescence's and _diffuse_transmission's parameters at a point (factors ×
 // textures, glTF's channels: the coat's factor in R and roughness in G, the sheen's colour in RGB and roughness in
 // A, the film's factor in R and thickness between its bounds in G, the transmitted share in A and its colour in
-// RGB), where the material has any of them; none elsewhere. The coat's normal is `n_vertex`, the interpolated vertex normal (the base's normal texture
-// and bump lie under the coat), tilted by the coat's own normal texture where it has one.
+// RGB), where the material has any of them; none elsewhere. The coat's normal is `n_vertex`, the interpolated
+// vertex normal (the base's normal texture and bump lie under the coat), tilted by the coat's own normal texture
+// where it has one.
 void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu, vec3 dpdv, vec2 footprint_lod,
                      inout Shading s) {
     s.clearcoat = 0.0;
@@ -46,6 +52,13 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
     s.anisotropy = 0.0;
     s.anisotropy_direction = vec3(0.0);
     if (m.clearcoat.w == 0.0) return;
+    s.iridescence = m.iridescence.x * layer_texel(m.iridescence_texture, m.iridescence_uv_rows, uv0, uv1, footprint_lod).r;
+    s.iridescence_ior = m.iridescence.y;
+    s.iridescence_thickness = m.iridescence.w;
+    if (m.iridescence_thickness_texture >= 0) {
+        float g = layer_texel(m.iridescence_thickness_texture, m.iridescence_thickness_uv_rows, uv0, uv1, footprint_lod).g;
+        s.iridescence_thickness = mix(m.iridescence.z, m.iridescence.w, g);
+    }
     s.anisotropy = m.anisotropy.x;
     if (s.anisotropy > 0.0) {
         // The direction in the tangent frame of TEXCOORD_0 (T along ∂p/∂u, B = ±n × T with the UVs' orientation,
@@ -69,42 +82,13 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
             s.anisotropy = 0.0;  // no tangent frame to stretch along
         }
     }
-    s.iridescence = m.iridescence.x;
-    if (m.iridescence_texture >= 0) {
-        s.iridescence *= material_texture(m.iridescence_texture, texture_uv(m.iridescence_uv_rows, uv0, uv1),
-                                          m.iridescence_uv_rows, footprint_lod).r;
-    }
-    s.iridescence_ior = m.iridescence.y;
-    s.iridescence_thickness = m.iridescence.w;
-    if (m.iridescence_thickness_texture >= 0) {
-        float g = material_texture(m.iridescence_thickness_texture,
-                                   texture_uv(m.iridescence_thickness_uv_rows, uv0, uv1),
-                                   m.iridescence_thickness_uv_rows, footprint_lod).g;
-        s.iridescence_thickness = mix(m.iridescence.z, m.iridescence.w, g);
-    }
-    s.diffuse_transmission = m.diffuse_transmission.a;
-    if (m.diffuse_transmission_texture >= 0) {
-        s.diffuse_transmission *= material_texture(m.diffuse_transmission_texture,
-                                                   texture_uv(m.diffuse_transmission_uv_rows, uv0, uv1),
-                                                   m.diffuse_transmission_uv_rows, footprint_lod).a;
-    }
-    s.diffuse_transmission_color = m.diffuse_transmission.rgb;
-    if (m.diffuse_transmission_color_texture >= 0) {
-        s.diffuse_transmission_color *= material_texture(m.diffuse_transmission_color_texture,
-                                                         texture_uv(m.diffuse_transmission_color_uv_rows, uv0, uv1),
-                                                         m.diffuse_transmission_color_uv_rows, footprint_lod).rgb;
-    }
-    s.clearcoat = m.clearcoat.x;
-    s.clearcoat_roughness = m.clearcoat.y;
-    if (m.clearcoat_texture >= 0) {
-        s.clearcoat *= material_texture(m.clearcoat_texture, texture_uv(m.clearcoat_uv_rows, uv0, uv1),
-                                        m.clearcoat_uv_rows, footprint_lod).r;
-    }
-    if (m.clearcoat_roughness_texture >= 0) {
-        s.clearcoat_roughness *= material_texture(m.clearcoat_roughness_texture,
-                                                  texture_uv(m.clearcoat_roughness_uv_rows, uv0, uv1),
-                                                  m.clearcoat_roughness_uv_rows, footprint_lod).g;
-    }
+    s.diffuse_transmission = m.diffuse_transmission.a *
+        layer_texel(m.diffuse_transmission_texture, m.diffuse_transmission_uv_rows, uv0, uv1, footprint_lod).a;
+    s.diffuse_transmission_color = m.diffuse_transmission.rgb *
+        layer_texel(m.diffuse_transmission_color_texture, m.diffuse_transmission_color_uv_rows, uv0, uv1, footprint_lod).rgb;
+    s.clearcoat = m.clearcoat.x * layer_texel(m.clearcoat_texture, m.clearcoat_uv_rows, uv0, uv1, footprint_lod).r;
+    s.clearcoat_roughness = m.clearcoat.y *
+        layer_texel(m.clearcoat_roughness_texture, m.clearcoat_roughness_uv_rows, uv0, uv1, footprint_lod).g;
     if (m.clearcoat_normal_texture >= 0) {
         vec3 texel = material_texture(m.clearcoat_normal_texture, transform_uv(m.clearcoat_normal_uv_rows, uv0),
                                       m.clearcoat_normal_uv_rows, footprint_lod).xyz;
@@ -113,16 +97,9 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
         transform_derivatives(m.clearcoat_normal_uv_rows, map_dpdu, map_dpdv);
         s.clearcoat_normal = normalize(normal_from_texture(n_vertex, map_dpdu, map_dpdv, texel, m.clearcoat.z));
     }
-    s.sheen_color = m.sheen.rgb;
-    s.sheen_roughness = m.sheen.a;
-    if (m.sheen_color_texture >= 0) {
-        s.sheen_color *= material_texture(m.sheen_color_texture, texture_uv(m.sheen_color_uv_rows, uv0, uv1),
-                                          m.sheen_color_uv_rows, footprint_lod).rgb;
-    }
-    if (m.sheen_roughness_texture >= 0) {
-        s.sheen_roughness *= material_texture(m.sheen_roughness_texture, texture_uv(m.sheen_roughness_uv_rows, uv0, uv1),
-                                              m.sheen_roughness_uv_rows, footprint_lod).a;
-    }
+    s.sheen_color = m.sheen.rgb * layer_texel(m.sheen_color_texture, m.sheen_color_uv_rows, uv0, uv1, footprint_lod).rgb;
+    s.sheen_roughness = m.sheen.a *
+        layer_texel(m.sheen_roughness_texture, m.sheen_roughness_uv_rows, uv0, uv1, footprint_lod).a;
 }
 
 // A material at one surface point.
