@@ -61,10 +61,20 @@ NodeName=$node NodeAddr=127.0.0.1 CPUs=$cpus State=UNKNOWN
 PartitionName=check Nodes=$node Default=YES MaxTime=INFINITE State=UP
 CONF
 
+# Stops the daemons and waits (up to 20 s) until they have exited: slurmctld writes its state as it shuts down, and
+# removing the work directory under it failed once with "Directory not empty".
 stop() {
-    scontrol shutdown >/dev/null 2>&1 || true
+    local pids=() pid
     for pid in "$work/slurmctld.pid" "$work/slurmd.pid" "$work/munge/munged.pid"; do
-        [ -f "$pid" ] && kill "$(cat "$pid")" 2>/dev/null || true
+        [ -f "$pid" ] && pids+=("$(cat "$pid")")
+    done
+    scontrol shutdown >/dev/null 2>&1 || true
+    for pid in "${pids[@]}"; do kill "$pid" 2>/dev/null || true; done
+    for _ in $(seq 200); do
+        local alive=0
+        for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
+        [ "$alive" = 0 ] && return 0
+        sleep 0.1
     done
 }
 now_ms() { date +%s%3N; }
