@@ -644,8 +644,8 @@ fn textured_triangle(extension: &str, uri: String, fallback: Option<String>) -> 
 
 /// Compressed and alternative texture containers decode to their PNG twin's texels: WebP (lossless,
 /// EXT_texture_webp) and KTX2 (KHR_texture_basisu's container) as raw RGBA8, Zstandard-supercompressed RGBA8 and
-/// raw RGB8 (alpha 1), each the texture's only image. Basis Universal texels, which strata cannot transcode, are an
-/// error naming the image, or, where the texture has a PNG `source` too, a warning and the PNG.
+/// raw RGB8 (alpha 1), each the texture's only image. Corrupt Basis Universal texels are an error naming the
+/// image, or, where the texture has a PNG `source` too, a warning and the PNG.
 #[test]
 fn webp_and_ktx2_textures_decode_to_their_png_twins_texels() {
     use image::ImageEncoder as _;
@@ -712,6 +712,66 @@ fn webp_and_ktx2_textures_decode_to_their_png_twins_texels() {
         "{:?}",
         with_png.warnings
     );
+}
+
+/// A file of tests/data/basis/ (made by scripts/make-basis-textures.sh).
+fn basis_file(name: &str) -> Vec<u8> {
+    std::fs::read(common::cli::repo_file(&format!("tests/data/basis/{name}"))).unwrap()
+}
+
+/// RGBA8 texels of a PNG in tests/data/basis/.
+fn basis_png(name: &str) -> (u32, u32, Vec<u8>) {
+    let image = image::load_from_memory(&basis_file(name)).unwrap().to_rgba8();
+    (image.width(), image.height(), image.into_raw())
+}
+
+/// KHR_texture_basisu with Basis Universal texels: an ETC1S (BasisLZ) and a UASTC (Zstandard) KTX2 file of one
+/// 36x20 image each load with no warning and transcode to exactly the bytes Binomial's reference transcoder gives,
+/// and stay near the image they encode: root-mean-square channel error against source.png at most what the
+/// encoders left, measured (ETC1S 18.9: one hue per 4x4 block cannot hold the yellow disc's edge on the blue
+/// ramp; UASTC 2.03; out of 255), rounded up. Every truncation and every byte corruption of both files either loads or
+/// fails with an error that names the file and the image, never a panic or an abort (one flipped byte of UASTC's
+/// level index once made the transcoder allocate 386 GB).
+#[test]
+fn basis_universal_ktx2_textures_transcode_to_the_reference_transcoders_texels() {
+    let dir = temp_dir("basis");
+    let load = |name: &str, ktx2: &[u8]| {
+        let path = dir.join(name);
+        let doc = textured_triangle("KHR_texture_basisu", data_uri("image/ktx2", ktx2), None);
+        std::fs::write(&path, serde_json::to_vec(&doc).unwrap()).unwrap();
+        strata::load_scene(&path)
+    };
+    let (width, height, source) = basis_png("source.png");
+    for (kind, max_rmse) in [("etc1s", 19.0), ("uastc", 2.1)] {
+        let ktx2 = basis_file(&format!("{kind}.ktx2"));
+        let scene = load("basis.gltf", &ktx2).unwrap_or_else(|e| panic!("{kind}: {e:#}"));
+        assert!(scene.warnings.is_empty(), "{kind}: {:?}", scene.warnings);
+        let image = &scene.images[scene.textures[0].image];
+        assert_eq!((image.width, image.height), (width, height), "{kind}");
+        let (_, _, reference) = basis_png(&format!("{kind}.reference.png"));
+        let differing = image.rgba8.iter().zip(&reference).filter(|(a, b)| a != b).count();
+        assert!(image.rgba8 == reference, "{kind}: {differing} of {} bytes differ from the reference", reference.len());
+        let squares: f64 = image.rgba8.iter().zip(&source).map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2)).sum();
+        let rmse = (squares / source.len() as f64).sqrt();
+        assert!(rmse <= max_rmse, "{kind}: RMS channel error {rmse:.2} against source.png");
+
+        for cut in 0..ktx2.len() {
+            if let Err(e) = load("cut.gltf", &ktx2[..cut]) {
+                let e = format!("{e:#}");
+                assert!(e.contains("cut.gltf") && e.contains("image 0"), "{kind} cut to {cut} bytes: {e}");
+            } else {
+                panic!("{kind} cut to {cut} of {} bytes loads", ktx2.len());
+            }
+        }
+        for at in 0..ktx2.len() {
+            let mut corrupt = ktx2.clone();
+            corrupt[at] ^= 0x5A;
+            if let Err(e) = load("corrupt.gltf", &corrupt) {
+                let e = format!("{e:#}");
+                assert!(e.contains("corrupt.gltf") && e.contains("image 0"), "{kind} byte {at}: {e}");
+            }
+        }
+    }
 }
 
 /// KHR_materials_variants: a triangle whose default material is 0 and whose variants "red" and "blue" map it to

@@ -1,6 +1,7 @@
 //! Texture images as glTF files carry them: PNG and JPEG (glTF 2.0 §3.8), WebP (`EXT_texture_webp`) and KTX2
-//! (`KHR_texture_basisu`'s container) with 8-bit uncompressed texels, raw or Zstandard-supercompressed. Every
-//! decoder is bounded: a corrupt header must not make strata allocate gigabytes.
+//! (`KHR_texture_basisu`'s container) with 8-bit uncompressed texels, raw or Zstandard-supercompressed, or with
+//! Basis Universal texels (ETC1S, UASTC) transcoded to RGBA8. Every decoder is bounded: a corrupt header must not
+//! make strata allocate gigabytes.
 use super::material::TextureImage;
 use anyhow::{anyhow, bail, Context as _, Result};
 
@@ -53,22 +54,41 @@ fn decode_ktx2(name: &str, bytes: &[u8]) -> Result<TextureImage> {
     if width == 0 || height == 0 || width > MAX_IMAGE_SIDE || height > MAX_IMAGE_SIDE {
         bail!("{width}x{height} texels: each side must be 1 to {MAX_IMAGE_SIDE}");
     }
-    const BASIS: &str = "Basis Universal texels (ETC1S or UASTC), which strata cannot transcode; re-encode the \
-                         texture as 8-bit KTX2 (raw or Zstandard) or PNG";
-    let channels = match header.format {
-        None => bail!("{BASIS}"),
-        Some(Format::R8G8B8A8_UNORM | Format::R8G8B8A8_SRGB | Format::B8G8R8A8_UNORM | Format::B8G8R8A8_SRGB) => 4,
-        Some(Format::R8G8B8_UNORM | Format::R8G8B8_SRGB | Format::B8G8R8_UNORM | Format::B8G8R8_SRGB) => 3,
-        Some(Format::R8G8_UNORM | Format::R8G8_SRGB) => 2,
-        Some(Format::R8_UNORM | Format::R8_SRGB) => 1,
-        Some(other) => bail!("texel format {other:?}: strata reads 8-bit uncompressed formats (R8 to R8G8B8A8)"),
+    // KTX 2.0 §3.4 and KHR_texture_basisu: Basis Universal payloads have no Vulkan format; ETC1S is the one
+    // BasisLZ-supercompressed payload.
+    let format = match header.format {
+        Some(format) if header.supercompression_scheme != Some(SupercompressionScheme::BasisLZ) => format,
+        _ => {
+            // The transcoder inflates a Zstandard level to the length its index records: bound that first, by the
+            // 16-byte 4x4 blocks of UASTC, the largest Basis payload, at the level's size.
+            for (i, level) in reader.levels().enumerate() {
+                let blocks = |side: u32| u64::from(side.checked_shr(i as u32).unwrap_or(0).max(1).div_ceil(4));
+                let largest = blocks(width) * blocks(height) * 16;
+                if level.uncompressed_byte_length > largest {
+                    bail!(
+                        "mip level {i} claims {} uncompressed bytes; a {width}x{height} Basis Universal image's \
+                         level holds at most {largest}",
+                        level.uncompressed_byte_length
+                    );
+                }
+            }
+            return transcode_basis(name, bytes, width, height);
+        }
+    };
+    let channels = match format {
+        Format::R8G8B8A8_UNORM | Format::R8G8B8A8_SRGB | Format::B8G8R8A8_UNORM | Format::B8G8R8A8_SRGB => 4,
+        Format::R8G8B8_UNORM | Format::R8G8B8_SRGB | Format::B8G8R8_UNORM | Format::B8G8R8_SRGB => 3,
+        Format::R8G8_UNORM | Format::R8G8_SRGB => 2,
+        Format::R8_UNORM | Format::R8_SRGB => 1,
+        other => bail!(
+            "texel format {other:?}: strata reads 8-bit uncompressed formats (R8 to R8G8B8A8) and Basis Universal"
+        ),
     };
     let texels = width as usize * height as usize;
     let level = reader.levels().next().context("no mip level")?;
     let data = match header.supercompression_scheme {
         None => level.data.to_vec(),
         Some(SupercompressionScheme::Zstandard) => zstd_decompress(level.data, texels * channels)?,
-        Some(SupercompressionScheme::BasisLZ) => bail!("{BASIS}"),
         Some(other) => bail!("supercompression {other:?} (strata reads none and Zstandard)"),
     };
     if data.len() < texels * channels {
@@ -78,7 +98,8 @@ fn decode_ktx2(name: &str, bytes: &[u8]) -> Result<TextureImage> {
             texels * channels
         );
     }
-    let bgr = matches!(header.format, Some(f) if [Format::B8G8R8A8_UNORM, Format::B8G8R8A8_SRGB, Format::B8G8R8_UNORM, Format::B8G8R8_SRGB].contains(&f));
+    let bgr =
+        [Format::B8G8R8A8_UNORM, Format::B8G8R8A8_SRGB, Format::B8G8R8_UNORM, Format::B8G8R8_SRGB].contains(&format);
     let mut rgba8 = Vec::with_capacity(texels * 4);
     for texel in data[..texels * channels].chunks_exact(channels) {
         // Missing channels read as a GPU samples them: green and blue 0, alpha 1.
@@ -88,6 +109,38 @@ fn decode_ktx2(name: &str, bytes: &[u8]) -> Result<TextureImage> {
             rgba.swap(0, 2);
         }
         rgba8.extend(rgba);
+    }
+    Ok(TextureImage { name: name.to_owned(), width, height, rgba8 })
+}
+
+/// A KTX2 file's Basis Universal texels (ETC1S or UASTC, either supercompression) transcoded to RGBA8 by the
+/// `basisu` crate, a port of Binomial's reference transcoder (tests/gltf_features.rs holds it to the reference's
+/// bytes on scripts/make-basis-textures.sh's files). The base level only, as for every other KTX2 file.
+fn transcode_basis(name: &str, bytes: &[u8], width: u32, height: u32) -> Result<TextureImage> {
+    use basisu::{DecodeFlags, TargetFormat, Transcoder};
+    let describe = |e: basisu::Error| match e {
+        basisu::Error::InvalidData | basisu::Error::Truncated => {
+            anyhow!("its Basis Universal data is corrupt or truncated ({e:?})")
+        }
+        other => anyhow!("its Basis Universal data cannot be transcoded: {other:?}"),
+    };
+    let transcoder = Transcoder::new(bytes).map_err(describe)?;
+    if transcoder.is_video() {
+        bail!("a Basis Universal video: glTF textures are single images");
+    }
+    if transcoder.base_dimensions() != (width, height) {
+        bail!(
+            "its Basis Universal data is {:?} texels, its KTX2 header says {width}x{height}",
+            transcoder.base_dimensions()
+        );
+    }
+    let rgba8 = transcoder.transcode(0, TargetFormat::Rgba32, DecodeFlags::NONE).map_err(describe)?;
+    let expected = width as usize * height as usize * 4;
+    if rgba8.len() != expected {
+        bail!(
+            "its Basis Universal base level transcoded to {} bytes, {width}x{height} RGBA8 texels are {expected}",
+            rgba8.len()
+        );
     }
     Ok(TextureImage { name: name.to_owned(), width, height, rgba8 })
 }
