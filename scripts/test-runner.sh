@@ -79,18 +79,45 @@ finish() {
     if ((show_output && status == 0)); then sed 's/^/    /' "$log"; fi
 }
 
-for i in "${!tests[@]}"; do
-    while ((${#index_of_pid[@]} >= jobs)); do
-        wait -n -p done_pid
-        finish "$done_pid" $?
-    done
+# Each of the `jobs` workers owns a contiguous stretch of the list (the tests of a file are neighbours) and runs
+# it in order; a worker whose stretch is done takes the back half of the longest one left. Tests of one file
+# mostly share pipeline variants, and lavapipe compiles a variant cold for tens of seconds on one core: two
+# processes that miss Mesa's cache at once both compile it, where one after the other the second finds it
+# (docs/performance.md, "A stretch of the list per worker").
+declare -a next_of=() end_of=() worker_of_pid=()
+((jobs <= ${#tests[@]})) || jobs=${#tests[@]}
+for ((w = 0; w < jobs; w++)); do
+    next_of[w]=$((w * ${#tests[@]} / jobs))
+    end_of[w]=$(((w + 1) * ${#tests[@]} / jobs))
+done
+# Starts worker `w`'s next test, if any is left.
+start_next() {
+    local w=$1 i longest=-1 v
+    if ((next_of[w] >= end_of[w])); then
+        for ((v = 0; v < jobs; v++)); do
+            ((end_of[v] > next_of[v] && (longest < 0 || end_of[v] - next_of[v] > end_of[longest] - next_of[longest]))) &&
+                longest=$v
+        done
+        ((longest >= 0)) || return 0
+        next_of[w]=$((next_of[longest] + (end_of[longest] - next_of[longest]) / 2))
+        end_of[w]=${end_of[longest]}
+        end_of[longest]=${next_of[w]}
+    fi
+    i=${next_of[w]}
+    next_of[w]=$((i + 1))
     started[i]=$EPOCHREALTIME
     "$bin" --exact "${tests[$i]}" "${child_args[@]}" >"$logs/$i.log" 2>&1 &
     index_of_pid[$!]=$i
-done
+    worker_of_pid[$!]=$w
+}
+for ((w = 0; w < jobs; w++)); do start_next "$w"; done
 while ((${#index_of_pid[@]} > 0)); do
     wait -n -p done_pid
-    finish "$done_pid" $?
+    status=$?
+    w=${worker_of_pid[$done_pid]}
+    unset "worker_of_pid[$done_pid]"
+    finish "$done_pid" "$status"
+    start_next "$w"
 done
 
 if ((${#failed[@]} > 0)); then
