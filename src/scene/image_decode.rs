@@ -58,22 +58,7 @@ fn decode_ktx2(name: &str, bytes: &[u8]) -> Result<TextureImage> {
     // BasisLZ-supercompressed payload.
     let format = match header.format {
         Some(format) if header.supercompression_scheme != Some(SupercompressionScheme::BasisLZ) => format,
-        _ => {
-            // The transcoder inflates a Zstandard level to the length its index records: bound that first, by the
-            // 16-byte 4x4 blocks of UASTC, the largest Basis payload, at the level's size.
-            for (i, level) in reader.levels().enumerate() {
-                let blocks = |side: u32| u64::from(side.checked_shr(i as u32).unwrap_or(0).max(1).div_ceil(4));
-                let largest = blocks(width) * blocks(height) * 16;
-                if level.uncompressed_byte_length > largest {
-                    bail!(
-                        "mip level {i} claims {} uncompressed bytes; a {width}x{height} Basis Universal image's \
-                         level holds at most {largest}",
-                        level.uncompressed_byte_length
-                    );
-                }
-            }
-            return transcode_basis(name, bytes, width, height);
-        }
+        _ => return transcode_basis(name, &reader, width, height),
     };
     let channels = match format {
         Format::R8G8B8A8_UNORM | Format::R8G8B8A8_SRGB | Format::B8G8R8A8_UNORM | Format::B8G8R8A8_SRGB => 4,
@@ -116,15 +101,28 @@ fn decode_ktx2(name: &str, bytes: &[u8]) -> Result<TextureImage> {
 /// A KTX2 file's Basis Universal texels (ETC1S or UASTC, either supercompression) transcoded to RGBA8 by the
 /// `basisu` crate, a port of Binomial's reference transcoder (tests/gltf_features.rs holds it to the reference's
 /// bytes on scripts/make-basis-textures.sh's files). The base level only, as for every other KTX2 file.
-fn transcode_basis(name: &str, bytes: &[u8], width: u32, height: u32) -> Result<TextureImage> {
+fn transcode_basis(name: &str, reader: &ktx2::Reader<&[u8]>, width: u32, height: u32) -> Result<TextureImage> {
     use basisu::{DecodeFlags, TargetFormat, Transcoder};
+    // The transcoder inflates a Zstandard level to the length its index records: bound that first, by the 16-byte
+    // 4x4 blocks of UASTC, the largest Basis payload, at the level's size.
+    for (i, level) in reader.levels().enumerate() {
+        let blocks = |side: u32| u64::from(side.checked_shr(i as u32).unwrap_or(0).max(1).div_ceil(4));
+        let largest = blocks(width) * blocks(height) * 16;
+        if level.uncompressed_byte_length > largest {
+            bail!(
+                "mip level {i} claims {} uncompressed bytes; a {width}x{height} Basis Universal image's level \
+                 holds at most {largest}",
+                level.uncompressed_byte_length
+            );
+        }
+    }
     let describe = |e: basisu::Error| match e {
         basisu::Error::InvalidData | basisu::Error::Truncated => {
             anyhow!("its Basis Universal data is corrupt or truncated ({e:?})")
         }
         other => anyhow!("its Basis Universal data cannot be transcoded: {other:?}"),
     };
-    let transcoder = Transcoder::new(bytes).map_err(describe)?;
+    let transcoder = Transcoder::new(reader.data()).map_err(describe)?;
     if transcoder.is_video() {
         bail!("a Basis Universal video: glTF textures are single images");
     }
