@@ -750,12 +750,13 @@ fn basis_png(name: &str) -> (u32, u32, Vec<u8>) {
 }
 
 /// KHR_texture_basisu with Basis Universal texels: an ETC1S (BasisLZ) and a UASTC (Zstandard) KTX2 file of one
-/// 36x20 image each, and the UASTC one rewritten with its blocks stored raw, load with no warning and transcode to exactly the bytes Binomial's reference transcoder gives,
-/// and stay near the image they encode: root-mean-square channel error against source.png at most what the
-/// encoders left, measured (ETC1S 18.9: one hue per 4x4 block cannot hold the yellow disc's edge on the blue
-/// ramp; UASTC 2.03; out of 255), rounded up. Every truncation and every byte corruption of both files either loads or
-/// fails with an error that names the file and the image, never a panic or an abort (one flipped byte of UASTC's
-/// level index once made the transcoder allocate 386 GB).
+/// 36x20 image each, and the UASTC one rewritten with its blocks stored raw, load with no warning, transcode to
+/// exactly the bytes Binomial's reference transcoder gives, and stay near the image they encode: root-mean-square
+/// channel error against source.png at most what the encoders left, measured (ETC1S 18.9: one hue per 4x4 block
+/// cannot hold the yellow disc's edge on the blue ramp; UASTC 2.03; out of 255), rounded up. Every truncation of
+/// each file fails with an error that names the file and the image; every byte corruption either loads or fails
+/// so, never a panic or an abort (one flipped byte of UASTC's level index once made the transcoder allocate
+/// 386 GB).
 #[test]
 fn basis_universal_ktx2_textures_transcode_to_the_reference_transcoders_texels() {
     let dir = temp_dir("basis");
@@ -785,12 +786,11 @@ fn basis_universal_ktx2_textures_transcode_to_the_reference_transcoders_texels()
         assert!(rmse <= max_rmse, "{kind}: RMS channel error {rmse:.2} against source.png");
 
         for cut in 0..ktx2.len() {
-            if let Err(e) = load("cut.gltf", &ktx2[..cut]) {
-                let e = format!("{e:#}");
-                assert!(e.contains("cut.gltf") && e.contains("image 0"), "{kind} cut to {cut} bytes: {e}");
-            } else {
-                panic!("{kind} cut to {cut} of {} bytes loads", ktx2.len());
-            }
+            let Err(e) = load("cut.gltf", &ktx2[..cut]) else {
+                panic!("{kind} cut to {cut} of {} bytes loads", ktx2.len())
+            };
+            let e = format!("{e:#}");
+            assert!(e.contains("cut.gltf") && e.contains("image 0"), "{kind} cut to {cut} bytes: {e}");
         }
         for at in 0..ktx2.len() {
             let mut corrupt = ktx2.clone();
