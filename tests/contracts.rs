@@ -9,6 +9,7 @@ use std::collections::HashMap;
 use std::mem::offset_of;
 use strata::render::accumulate_layout::{AccumulatePush, GpuCamera, GpuLight, GpuPrimitiveRecord, ResolvePush};
 use strata::render::gbuffer_layout::{GBufferDraw, GBufferPush, GpuBump, GpuMaterial};
+use strata::render::skinning::{GpuInfluence, SkinPush};
 use strata::vk::pipeline::Binding;
 use strata::vk::spirv::Module;
 
@@ -227,7 +228,8 @@ fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
     }
 }
 
-/// The other passes' push constants and draw records: the G-buffer pass (both stages), the resolve pass.
+/// The other passes' push constants and records: the G-buffer pass (both stages), the resolve pass, the skinning
+/// pass.
 #[test]
 fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
     let gbuffer_push = of!(GBufferPush; clip_from_world, view_z_row);
@@ -235,11 +237,15 @@ fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
     draw.push(("pad1", offset_of!(GBufferDraw, pad)));
     // The Rust struct pads to 16 bytes past the GLSL block's last member.
     let resolve = of!(ResolvePush; width, height, samples, exposure_scale, tone_map, transparent);
+    let skin = of!(SkinPush; positions, normals, dpdu, dpdv, out_positions, out_normals, out_dpdu, out_dpdv,
+        influences, joint_matrices, vertex_count, set_count, joint_count, pad);
+    let influence = of!(GpuInfluence; joints01, joints23, weights);
     let mut problems = Vec::new();
     for (name, push, structs) in [
         ("gbuffer.vert", gbuffer_push.clone(), vec![("GBufferDraw", draw.clone())]),
         ("gbuffer.frag", gbuffer_push, vec![("GBufferDraw", draw), ("GpuMaterial", material_offsets())]),
         ("resolve.comp", resolve, vec![]),
+        ("skin.comp", skin, vec![("GpuInfluence", influence)]),
     ] {
         let m = module(name);
         let block = push_constant_block(&m).unwrap_or_else(|| panic!("{name} reads no push constants"));
@@ -266,7 +272,9 @@ fn every_pass_declares_the_bindings_and_workgroup_size_the_rust_side_uses() {
         strata::vk::spirv::descriptor_bindings(&[("sampling_probe.comp", strata::shaders::SAMPLING_PROBE_COMP)], 1)
             .unwrap();
     let probe = Some([PROBE_WORKGROUP_SIZE, 1, 1]);
-    let passes: [(&[&str], Vec<Binding>, WorkgroupSize); 7] = [
+    let passes: [(&[&str], Vec<Binding>, WorkgroupSize); 8] = [
+        // Everything the skinning pass reads and writes is reached by device address: no bindings.
+        (&["skin.comp"], Vec::new(), Some([SKIN_WORKGROUP_SIZE, 1, 1])),
         (&["gbuffer.vert", "gbuffer.frag"], GBufferPass::bindings(1).unwrap(), None),
         (&["preview.vert", "preview.frag"], PreviewPass::bindings(1).unwrap(), None),
         (&["resolve.comp"], ResolvePass::bindings().unwrap(), Some([RESOLVE_TILE_SIZE, RESOLVE_TILE_SIZE, 1])),

@@ -126,4 +126,7 @@ const uint RAY_PROBE_BINDING_HITS = 2u;
 const uint NOISE_PROBE_BINDING_POINTS = 0u;
 const uint NOISE_PROBE_BINDING_RESULTS = 1u;
 const uint SAMPLING_PROBE_BINDING_RESULTS = 0u;
+
+// The skinning pass (skin.comp; render::skinning::SkinningPass): one invocation per vertex.
+const uint SKIN_WORKGROUP_SIZE = 64u;
 #endif

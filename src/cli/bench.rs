@@ -46,8 +46,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
 
 /// What deformed meshes cost per sample (docs/architecture.md, "Deformed meshes"): a skinned tube of 4,096
 /// triangles bending and MorphStressTest's animated weights (2,412 triangles), each against its own geometry frozen
-/// at the shutter's opening (the same triangles, nothing deformed), in one run: the host's deformation alone, the
-/// GPU's acceleration-structure time per sample (the deformed BLAS rebuilds and the TLAS), and the whole frame.
+/// at the shutter's opening (the same triangles, nothing deformed), in one run: the host's work per sample (joint
+/// matrices, morphs) beside its twin of the whole deformation, the GPU's time per sample before the G-buffer (the
+/// skinning pass, the deformed BLAS rebuilds and the TLAS), and the whole frame.
 fn bench_deform(args: &BenchArgs, gpu: Gpu) -> Result<()> {
     use strata::bench::time_frame_with;
     use strata::scene::fixtures::{frozen_at, skinned_tube};
@@ -67,17 +68,36 @@ fn bench_deform(args: &BenchArgs, gpu: Gpu) -> Result<()> {
         }
         scene.camera = Some(scene.camera_or_default());
         let frozen = frozen_at(scene, scene.shutter.0);
-        // The host's share: deforming every deformed instance once per sample, as the sample loop does.
+        // The host's share per sample, as `DeformedStreams::write_slot` does it: a skinned instance's joint
+        // matrices (and its morph where the clip animates its weights), a morphing one's morph; and, for
+        // comparison, the host twin of the whole deformation (what the host did per sample before the skinning
+        // pass).
         let deformed = scene.deformed_instances();
-        let started = std::time::Instant::now();
-        for k in 0..args.spp {
-            let t = scene.shutter.0 + (scene.shutter.1 - scene.shutter.0) * (k as f32 + 0.5) / args.spp as f32;
-            let node_world = scene.node_world_transforms(Some(t));
-            for &i in &deformed {
-                std::hint::black_box(scene.deform_instance(i, &node_world, Some(t)));
+        let time_of =
+            |k: u32| scene.shutter.0 + (scene.shutter.1 - scene.shutter.0) * (k as f32 + 0.5) / args.spp as f32;
+        let per_sample_ms = |work: &dyn Fn(f32, &[glam::Mat4], usize)| {
+            let started = std::time::Instant::now();
+            for k in 0..args.spp {
+                let t = time_of(k);
+                let node_world = scene.node_world_transforms(Some(t));
+                deformed.iter().for_each(|&i| work(t, &node_world, i));
             }
-        }
-        let host_ms = started.elapsed().as_secs_f64() * 1e3 / f64::from(args.spp);
+            started.elapsed().as_secs_f64() * 1e3 / f64::from(args.spp)
+        };
+        let host_ms = per_sample_ms(&|t, node_world, i| match scene.instance_skin(i) {
+            Some(skin) => {
+                std::hint::black_box(skin.joint_matrices(node_world));
+                if scene.has_animated_weights(i) {
+                    std::hint::black_box(scene.morph_instance(i, Some(t)));
+                }
+            }
+            None => {
+                std::hint::black_box(scene.morph_instance(i, Some(t)));
+            }
+        });
+        let twin_ms = per_sample_ms(&|t, node_world, i| {
+            std::hint::black_box(scene.deform_instance(i, node_world, Some(t)));
+        });
         let settings = strata::scene::settings::RenderSettings {
             width: w,
             height: h,
@@ -92,9 +112,13 @@ fn bench_deform(args: &BenchArgs, gpu: Gpu) -> Result<()> {
             s.pass_times.unwrap_or_default().tlas_ms / f64::from(s.samples.max(1))
         };
         println!("{name}: {} triangles deformed", scene.triangle_count());
-        println!("  host deformation {host_ms:.3} ms per sample");
         println!(
-            "  acceleration structures per sample: {:.3} ms deformed (BLAS rebuilds + TLAS), {:.3} ms frozen (TLAS)",
+            "  host per sample {:.1} µs (its twin of the whole deformation: {:.1} µs)",
+            host_ms * 1e3,
+            twin_ms * 1e3
+        );
+        println!(
+            "  GPU per sample before the G-buffer: {:.3} ms deformed (skinning, BLAS rebuilds, TLAS), {:.3} ms frozen (TLAS)",
             per_sample(&moving),
             per_sample(&still)
         );

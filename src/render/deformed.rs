@@ -1,28 +1,81 @@
-//! Deformed instances on the GPU (docs/architecture.md, "Deformed meshes"): a skinned or morphing instance's positions, normals
-//! and surface derivatives change with time, so each sample of a batch gets its own copy of them, written by the
-//! host at the sample's shutter time (`scene::skin`, `scene::morph`), and its own BLAS, rebuilt from that copy in the sample's
-//! commands before the TLAS that places it. The streams that do not move (UVs, colours, indices) stay the mesh's.
+//! Deformed instances on the GPU (docs/architecture.md, "Deformed meshes"): a skinned or morphing instance's
+//! positions, normals and surface derivatives change with time, so each sample of a batch gets its own copy of
+//! them and its own BLAS, rebuilt from that copy in the sample's commands before the TLAS that places it. A
+//! skinned instance's copy is written by the skinning pass (`render::skinning`) from the sample's joint matrices,
+//! the one thing the host writes for it per sample (with its morphed streams where a clip animates its morph
+//! weights); a morphing instance without a skin has its copy written by the host (`scene::morph`). The streams
+//! that do not move (UVs, colours, indices) stay the mesh's.
 use super::accumulate_layout::GpuPrimitiveRecord;
 use super::gpu_scene::{GpuPrimitive, GpuScene};
 use super::ray_scene::{is_opaque, RayScene};
-use crate::scene::Scene;
+use super::skinning::{gpu_influences, SkinPush, SkinningPass};
+use crate::scene::skin::DeformedVertices;
+use crate::scene::{Primitive, Scene};
 use crate::vk::accel::{AccelerationStructure, DynamicBlas, TriangleGeometry, BUILD_INPUT_USAGE};
+use crate::vk::commands::Access;
+use crate::vk::frame_graph::{FrameGraph, Use};
 use crate::vk::{Buffer, Device, MemoryLocation};
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 use glam::{Mat4, Vec3};
 use std::sync::Arc;
 
-/// One primitive's moving streams: `slots` copies of `vertex_count` vertices each, host-visible.
+/// What a frame graph knows the deformed instances' vertex streams by: the skinning pass writes them, the BLAS
+/// builds, the G-buffer pass and the rays read them (through many buffers and device addresses, so their barriers
+/// are global memory barriers).
+pub const DEFORMED_STREAMS: &str = "deformed vertex streams";
+
+/// Positions, normals, dpdu and dpdv: the four streams that deform, each of 12-byte vectors.
+type Streams = [Buffer; 4];
+
+/// One primitive's moving streams: `slots` copies of `vertex_count` vertices each.
 pub struct DeformedPrimitive {
     pub positions: Buffer,
     pub normals: Buffer,
     pub dpdu: Buffer,
     pub dpdv: Buffer,
     pub vertex_count: u32,
+    /// Where the primitive is skinned on the GPU: what the skinning pass reads.
+    skinning: Option<SkinnedPrimitive>,
+}
+
+/// What the skinning pass reads for one primitive: its influences, and the streams it skins from.
+struct SkinnedPrimitive {
+    influences: Buffer,
+    set_count: u32,
+    /// The mesh's streams (one copy, device-local), or, where a clip animates the morph weights, `slots` copies
+    /// the host morphs into (host-visible).
+    source: Streams,
+    morphs: bool,
 }
 
 impl DeformedPrimitive {
+    /// `slots` copies of `vertex_count` vertices, written by the skinning pass where `skinning` is given (then
+    /// device-local) and by the host otherwise (host-visible).
+    fn new(
+        device: &Arc<Device>,
+        name: &str,
+        vertex_count: u32,
+        slots: u32,
+        skinning: Option<SkinnedPrimitive>,
+    ) -> Result<Self> {
+        let usage = vk::BufferUsageFlags::VERTEX_BUFFER
+            | vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | BUILD_INPUT_USAGE;
+        let location = if skinning.is_some() { MemoryLocation::GpuOnly } else { MemoryLocation::CpuToGpu };
+        let bytes = (u64::from(vertex_count) * 12 * u64::from(slots)).max(12);
+        let stream = |what: &str| Buffer::new(device, &format!("{name} deformed {what}"), bytes, usage, location, 16);
+        Ok(DeformedPrimitive {
+            positions: stream("positions")?,
+            normals: stream("normals")?,
+            dpdu: stream("dpdu")?,
+            dpdv: stream("dpdv")?,
+            vertex_count,
+            skinning,
+        })
+    }
+
     /// Where `slot`'s copy starts in each stream (all four hold 12-byte vectors).
     pub fn offset(&self, slot: u32) -> u64 {
         u64::from(slot) * u64::from(self.vertex_count) * 12
@@ -34,6 +87,9 @@ impl DeformedPrimitive {
 pub struct DeformedInstance {
     pub instance: usize,
     pub primitives: Vec<DeformedPrimitive>,
+    /// A skinned instance's joint matrices, `joint_count` per slot (host-visible).
+    joints: Option<Buffer>,
+    joint_count: u32,
 }
 
 /// The moving vertex streams of every deformed instance, `slots` samples' worth.
@@ -42,7 +98,59 @@ pub struct DeformedStreams {
     /// Per scene instance: its index in `instances`, if it deforms.
     index_of: Vec<Option<usize>>,
     slots: u32,
+    /// Present where some instance is skinned.
+    skinning: Option<SkinningPass>,
 }
+
+impl SkinnedPrimitive {
+    /// What the skinning pass reads for `loaded` (its `vertex_count` vertices as GpuScene holds them): its
+    /// influences, and its streams once, or room for `slots` morphed copies where the clip animates its weights.
+    fn new(
+        device: &Arc<Device>,
+        name: &str,
+        loaded: &Primitive,
+        vertex_count: u32,
+        slots: u32,
+        morphs: bool,
+    ) -> Result<Self> {
+        let count = vertex_count as usize;
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        let bytes = (u64::from(vertex_count) * 12 * u64::from(slots)).max(12);
+        let loaded_streams = streams_of(loaded);
+        let stream = |k: usize| -> Result<Buffer> {
+            let what = STREAM_NAMES[k];
+            if morphs {
+                let name = format!("{name} morphed {what}");
+                Buffer::new(device, &name, bytes, usage, MemoryLocation::CpuToGpu, 16)
+            } else {
+                let name = format!("{name} rest {what}");
+                Buffer::device_local_with_data(device, &name, &padded(loaded_streams[k], count.max(1)), usage, 16)
+            }
+        };
+        let source = [stream(0)?, stream(1)?, stream(2)?, stream(3)?];
+        let mut influences = gpu_influences(&loaded.skin_influences, count);
+        if influences.is_empty() {
+            influences.push(Default::default());
+        }
+        let influences =
+            Buffer::device_local_with_data(device, &format!("{name} joint influences"), &influences, usage, 16)?;
+        Ok(Self { influences, set_count: loaded.skin_influences.len() as u32, source, morphs })
+    }
+}
+
+/// `values` padded with zeros to `count` vectors (a stream a primitive lacks is zeros, as GpuScene fills it).
+fn padded(values: &[Vec3], count: usize) -> Vec<Vec3> {
+    let mut out = values.to_vec();
+    out.resize(count, Vec3::ZERO);
+    out
+}
+
+/// A primitive's four deforming streams, in `Streams` order.
+fn streams_of(p: &Primitive) -> [&[Vec3]; 4] {
+    [&p.positions, &p.normals, &p.dpdu, &p.dpdv]
+}
+
+const STREAM_NAMES: [&str; 4] = ["positions", "normals", "dpdu", "dpdv"];
 
 impl DeformedStreams {
     pub fn new(device: &Arc<Device>, scene: &Scene, geometry: &GpuScene, slots: u32) -> Result<Self> {
@@ -51,30 +159,43 @@ impl DeformedStreams {
         let mut instances = Vec::new();
         for instance in scene.deformed_instances() {
             let name = &scene.instances[instance].name;
-            let usage = vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::STORAGE_BUFFER | BUILD_INPUT_USAGE;
-            let primitives = geometry.meshes[scene.instances[instance].mesh]
+            let skin = scene.instance_skin(instance);
+            let morphs = scene.has_animated_weights(instance);
+            let mesh = scene.instances[instance].mesh;
+            // GpuScene leaves out primitives without triangles; so do the streams.
+            let kept = scene.meshes[mesh].primitives.iter().filter(|p| !p.indices.is_empty());
+            let primitives = geometry.meshes[mesh]
                 .primitives
                 .iter()
+                .zip(kept)
                 .enumerate()
-                .map(|(p, gpu)| {
-                    let bytes = (u64::from(gpu.vertex_count) * 12 * u64::from(slots)).max(12);
-                    let stream = |what: &str| {
-                        let name = format!("{name}/{p} deformed {what}");
-                        Buffer::new(device, &name, bytes, usage, MemoryLocation::CpuToGpu, 16)
+                .map(|(p, (gpu, loaded))| {
+                    let name = format!("{name}/{p}");
+                    let skinning = match skin {
+                        Some(_) => Some(SkinnedPrimitive::new(device, &name, loaded, gpu.vertex_count, slots, morphs)?),
+                        None => None,
                     };
-                    Ok(DeformedPrimitive {
-                        positions: stream("positions")?,
-                        normals: stream("normals")?,
-                        dpdu: stream("dpdu")?,
-                        dpdv: stream("dpdv")?,
-                        vertex_count: gpu.vertex_count,
-                    })
+                    DeformedPrimitive::new(device, &name, gpu.vertex_count, slots, skinning)
                 })
                 .collect::<Result<Vec<_>>>()?;
+            let joint_count = skin.map_or(0, |s| s.joints.len() as u32);
+            let joints = match skin {
+                Some(_) => Some(Buffer::new(
+                    device,
+                    &format!("{name} joint matrices"),
+                    u64::from(joint_count.max(1)) * 64 * u64::from(slots),
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS,
+                    MemoryLocation::CpuToGpu,
+                    16,
+                )?),
+                None => None,
+            };
             index_of[instance] = Some(instances.len());
-            instances.push(DeformedInstance { instance, primitives });
+            instances.push(DeformedInstance { instance, primitives, joints, joint_count });
         }
-        Ok(Self { instances, index_of, slots })
+        let any_skin = instances.iter().any(|i| i.joints.is_some());
+        let skinning = if any_skin { Some(SkinningPass::new(device)?) } else { None };
+        Ok(Self { instances, index_of, slots, skinning })
     }
 
     pub fn is_empty(&self) -> bool {
@@ -91,31 +212,116 @@ impl DeformedStreams {
         self.index_of.get(instance).copied().flatten()
     }
 
-    /// Deforms every instance at time `t`, whose node transforms are `node_world`, into `slot`.
+    /// Writes what `slot` deforms from at time `t`, whose node transforms are `node_world`: a skinned instance's
+    /// joint matrices (and its morphed streams where the clip animates its weights), a morphing instance's
+    /// morphed streams themselves. The skinning pass (`record_skinning`) does the rest on the GPU.
     pub fn write_slot(&mut self, slot: u32, scene: &Scene, node_world: &[Mat4], t: f32) -> Result<()> {
         if slot >= self.slots {
             bail!("deformed streams: slot {slot} of {}", self.slots);
         }
         for deformed in &mut self.instances {
-            let vertices = scene.deform_instance(deformed.instance, node_world, Some(t)).unwrap_or_default();
-            // GpuScene leaves out primitives without triangles; so do the streams.
-            let mesh = &scene.meshes[scene.instances[deformed.instance].mesh];
-            let kept = mesh.primitives.iter().zip(vertices).filter(|(p, _)| !p.indices.is_empty()).map(|(_, v)| v);
-            for (gpu, v) in deformed.primitives.iter_mut().zip(kept) {
+            let instance = deformed.instance;
+            if let (Some(joints), Some(skin)) = (&mut deformed.joints, scene.instance_skin(instance)) {
+                let matrices = skin.joint_matrices(node_world);
+                joints
+                    .write(u64::from(slot) * u64::from(deformed.joint_count) * 64, bytemuck::cast_slice(&matrices))?;
+            }
+            let morphs = deformed.primitives.iter().any(|p| p.skinning.as_ref().is_some_and(|s| s.morphs));
+            if deformed.joints.is_some() && !morphs {
+                continue;
+            }
+            // Morphed at t (GpuScene leaves out primitives without triangles; so do the streams), then written
+            // where the skinning pass reads them or, without a skin, where everything else does.
+            let mesh = &scene.meshes[scene.instances[instance].mesh];
+            let morphed = scene.morph_instance(instance, Some(t));
+            let kept = mesh.primitives.iter().zip(morphed).filter(|(p, _)| !p.indices.is_empty());
+            for (gpu, (loaded, morphed)) in deformed.primitives.iter_mut().zip(kept) {
                 let count = gpu.vertex_count as usize;
                 let offset = gpu.offset(slot);
-                let padded = |values: &[Vec3]| -> Vec<Vec3> {
-                    let mut out = values.to_vec();
-                    out.resize(count, Vec3::ZERO);
-                    out
+                let values = streams_of(morphed.as_ref().unwrap_or(loaded)).map(|s| padded(s, count));
+                let targets: [&mut Buffer; 4] = match &mut gpu.skinning {
+                    Some(skinning) => {
+                        let [a, b, c, d] = &mut skinning.source;
+                        [a, b, c, d]
+                    }
+                    None => [&mut gpu.positions, &mut gpu.normals, &mut gpu.dpdu, &mut gpu.dpdv],
                 };
-                gpu.positions.write(offset, bytemuck::cast_slice(&padded(&v.positions)))?;
-                gpu.normals.write(offset, bytemuck::cast_slice(&padded(&v.normals)))?;
-                gpu.dpdu.write(offset, bytemuck::cast_slice(&padded(&v.dpdu)))?;
-                gpu.dpdv.write(offset, bytemuck::cast_slice(&padded(&v.dpdv)))?;
+                for (target, values) in targets.into_iter().zip(&values) {
+                    target.write(offset, bytemuck::cast_slice(values))?;
+                }
             }
         }
         Ok(())
+    }
+
+    /// Records `slot`'s skinning, before anything reads the slot's streams (the BLAS builds first).
+    pub fn record_skinning(&self, graph: &mut FrameGraph, cmd: vk::CommandBuffer, slot: u32) {
+        let Some(pass) = &self.skinning else { return };
+        let written = [Use::write_memory(DEFORMED_STREAMS, Access::COMPUTE_WRITE)];
+        graph.pass(cmd, "skinning pass", &written, || {
+            for deformed in &self.instances {
+                let Some(joints) = &deformed.joints else { continue };
+                for gpu in &deformed.primitives {
+                    let Some(skinning) = &gpu.skinning else { continue };
+                    if gpu.vertex_count == 0 {
+                        continue;
+                    }
+                    let offset = gpu.offset(slot);
+                    let source_offset = if skinning.morphs { offset } else { 0 };
+                    let [positions, normals, dpdu, dpdv] =
+                        skinning.source.each_ref().map(|b| b.address + source_offset);
+                    let push = SkinPush {
+                        positions,
+                        normals,
+                        dpdu,
+                        dpdv,
+                        out_positions: gpu.positions.address + offset,
+                        out_normals: gpu.normals.address + offset,
+                        out_dpdu: gpu.dpdu.address + offset,
+                        out_dpdv: gpu.dpdv.address + offset,
+                        influences: skinning.influences.address,
+                        joint_matrices: joints.address + u64::from(slot) * u64::from(deformed.joint_count) * 64,
+                        vertex_count: gpu.vertex_count,
+                        set_count: skinning.set_count,
+                        joint_count: deformed.joint_count,
+                        pad: 0,
+                    };
+                    pass.record(cmd, &push);
+                }
+            }
+        });
+    }
+
+    /// `slot`'s deformed streams read back to the host, per deformed instance and primitive (what the skinning
+    /// pass or the host wrote there): for tests that hold the GPU's skinning to its host twin.
+    pub fn read_slot(&self, device: &Arc<Device>, slot: u32) -> Result<Vec<Vec<DeformedVertices>>> {
+        let after = Access::COMPUTE_WRITE;
+        let mut out = Vec::with_capacity(self.instances.len());
+        for deformed in &self.instances {
+            let mut primitives = Vec::with_capacity(deformed.primitives.len());
+            for gpu in &deformed.primitives {
+                let range = |all: Vec<Vec3>| -> Vec<Vec3> {
+                    let first = slot as usize * gpu.vertex_count as usize;
+                    all[first..first + gpu.vertex_count as usize].to_vec()
+                };
+                let read = |b: &Buffer| -> Result<Vec<Vec3>> {
+                    Ok(range(
+                        crate::vk::readback::read_buffer::<f32>(device, b, after)?
+                            .chunks_exact(3)
+                            .map(Vec3::from_slice)
+                            .collect(),
+                    ))
+                };
+                primitives.push(DeformedVertices {
+                    positions: read(&gpu.positions)?,
+                    normals: read(&gpu.normals)?,
+                    dpdu: read(&gpu.dpdu)?,
+                    dpdv: read(&gpu.dpdv)?,
+                });
+            }
+            out.push(primitives);
+        }
+        Ok(out)
     }
 }
 

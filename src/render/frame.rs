@@ -4,6 +4,7 @@
 //! the host waits once per batch (to report progress and reuse the per-sample buffers), never per sample.
 use super::accumulate::{AccumulateInputs, AccumulateLaunch, AccumulatePass, AccumulateVariant, TracePath};
 use super::accumulate_layout::AccumulatePush;
+use super::deformed::DEFORMED_STREAMS;
 use super::gbuffer::{GBuffer, GBufferPass};
 use super::resolve::ResolvePass;
 pub use super::sample_slots::{camera_sample_at, gpu_camera, seed32};
@@ -655,6 +656,7 @@ impl SamplePasses<'_> {
         let device = targets.sums.device();
         let first = !matches!(sums, SumsStart::Continue);
         stamp(0, vk::PipelineStageFlags2::TOP_OF_PIPE);
+        slots.draws.deformed.record_skinning(graph, cmd, slot);
         slots.record_builds(graph, cmd, slot);
         stamp(1, vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR);
         if !self.traced || first {
@@ -686,6 +688,7 @@ impl SamplePasses<'_> {
             Use::read_memory(ACCELERATION_STRUCTURES, Access::AS_COMPUTE_READ),
             Use::write_buffer(&targets.sums, Access::COMPUTE_READ_WRITE),
             Use::write_buffer(&slots.counters, Access::COMPUTE_READ_WRITE),
+            Use::read_memory(DEFORMED_STREAMS, Access::COMPUTE_READ),
         ]);
         uses.extend(self.ray_log.map(|log| Use::write_buffer(log, Access::COMPUTE_READ_WRITE)));
         graph.pass(cmd, self.accumulate.label(), &uses, || self.accumulate.record(cmd, self.set, &sample.push));

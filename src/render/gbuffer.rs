@@ -2,7 +2,7 @@
 //! attachments of `gbuffer_layout` with dynamic rendering; the fragment shader evaluates the material and the
 //! Blinn bump-mapped normal. One pipeline draws every material: materials in a storage buffer, textures in a
 //! combined-image-sampler array indexed per material.
-use super::deformed::DeformedStreams;
+use super::deformed::{DeformedStreams, DEFORMED_STREAMS};
 use super::gbuffer_layout::{attachment, GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT};
 use super::gpu_scene::GpuScene;
 use super::textures::GpuTextures;
@@ -278,6 +278,7 @@ impl GBufferPass {
             vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Access::DEPTH_ATTACHMENT,
         ));
+        uses.push(Use::read_memory(DEFORMED_STREAMS, Access::VERTEX_INPUT_READ));
         graph.pass(cmd, "gbuffer pass", &uses, || {
             let colors: Vec<(&Image, vk::ClearColorValue)> = gbuffer
                 .color
@@ -341,6 +342,7 @@ impl GBufferPass {
         let device = &self.device;
         let mut graph = FrameGraph::new(device);
         submit_and_wait(device, "gbuffer frame", |cmd| {
+            inputs.deformed.record_skinning(&mut graph, cmd, 0);
             self.record(&mut graph, cmd, gbuffer, inputs, 0, sample);
             Ok(())
         })?;

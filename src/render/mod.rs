@@ -19,6 +19,7 @@ pub mod ray_probe;
 pub mod ray_scene;
 pub mod resolve;
 pub mod sample_slots;
+pub mod skinning;
 pub mod solid;
 pub mod textures;
 

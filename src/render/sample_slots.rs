@@ -6,7 +6,7 @@ use super::accumulate::counter_bytes;
 use super::accumulate_layout::{
     AccumulatePush, GpuCamera, GpuLight, COUNTERS_PER_SLOT, COUNTER_SECONDARY_RAYS, COUNTER_SHADOW_RAYS,
 };
-use super::deformed::DeformedRays;
+use super::deformed::{DeformedRays, DEFORMED_STREAMS};
 use super::gbuffer::GBufferInputs;
 use super::lights::LightSet;
 use super::ray_scene::RayScene;
@@ -204,7 +204,8 @@ impl<'a> SampleSlots<'a> {
     pub fn record_builds(&self, graph: &mut FrameGraph, cmd: vk::CommandBuffer, slot: u32) {
         let builds = [Use::write_memory(ACCELERATION_STRUCTURES, Access::AS_BUILD_READ_WRITE)];
         if let Some(deformed) = &self.deformed_rays {
-            graph.pass(cmd, "deformed BLAS builds", &builds, || deformed.record_builds(cmd, slot));
+            let uses = [builds[0], Use::read_memory(DEFORMED_STREAMS, Access::AS_BUILD_INPUT_READ)];
+            graph.pass(cmd, "deformed BLAS builds", &uses, || deformed.record_builds(cmd, slot));
         }
         graph.pass(cmd, "TLAS build", &builds, || self.tlas.record_build(cmd, slot));
     }

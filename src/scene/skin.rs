@@ -1,8 +1,9 @@
 //! Deformation: morph weights a clip animates (§3.7.2.2, `morph`) and skins (glTF 2.0 §3.7.3): joints, their inverse bind matrices, and each vertex's joints and weights. A skinned
 //! vertex is Σ wᵢ·Jᵢ·p with joint matrix Jᵢ = (joint i's world transform) · (its inverse bind matrix), which puts it
 //! in the world directly: the transform of the node that holds the mesh is not applied (§3.7.3.3), so a skinned
-//! instance's transform is the identity (`Scene::instance_transforms_from`). Deformed on the host, once per sample
-//! at its shutter time (docs/architecture.md, "Deformed meshes").
+//! instance's transform is the identity (`Scene::instance_transforms_from`). Each sample's deformation at its
+//! shutter time: morphs on the host, skins on the GPU (`render::skinning`, whose twin `skin_vertices` is;
+//! docs/architecture.md, "Deformed meshes").
 use super::{Primitive, Property, Scene};
 use glam::{Mat3, Mat4, Vec3, Vec4};
 
@@ -93,7 +94,7 @@ impl Scene {
 
     /// Whether instance `instance`'s morph weights are animated: its node has a weights channel in the clip and
     /// its mesh has morph targets.
-    fn has_animated_weights(&self, instance: usize) -> bool {
+    pub fn has_animated_weights(&self, instance: usize) -> bool {
         let Some(i) = self.instances.get(instance) else { return false };
         let animated = i.node.is_some_and(|node| {
             self.animations.iter().flat_map(|a| &a.channels).any(|c| c.node == node && c.property == Property::Weights)
@@ -107,10 +108,30 @@ impl Scene {
         (0..self.instances.len()).filter(|&i| self.instance_skin(i).is_some() || self.has_animated_weights(i)).collect()
     }
 
+    /// Instance `instance`'s primitives morphed at time `t`'s weights where the clip animates them (None: the
+    /// rest pose), in mesh order: each the primitive morphed (glTF 2.0 §3.7.2.2) and finished as the loader
+    /// finishes one, or None where it keeps its loaded attributes (no animated weights, no targets, or weights
+    /// that do not morph: not finite, or moving a vertex to infinity).
+    pub fn morph_instance(&self, instance: usize, t: Option<f32>) -> Vec<Option<Primitive>> {
+        let Some(i) = self.instances.get(instance) else { return Vec::new() };
+        let weights = t
+            .filter(|_| self.has_animated_weights(instance))
+            .and_then(|t| self.animations.iter().find_map(|a| a.weights_at(i.node?, t)));
+        let mesh = &self.meshes[i.mesh];
+        mesh.primitives
+            .iter()
+            .map(|p| match (&weights, &p.morph) {
+                (Some(w), Some(source)) => super::morph::morphed(source, w).ok(),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Instance `instance`'s primitives deformed at time `t` (None: the rest pose), given every node's world
     /// transform then (`node_world`): morphed at the clip's weights, then skinned (glTF 2.0 §3.7.2.2 before
     /// §3.7.3). Skinned vertices are in the world, the others in the instance's object space. `None` for an
-    /// instance that does not deform.
+    /// instance that does not deform. The renderer skins on the GPU (`render::skinning`); this is its twin, and
+    /// what the motion pass and the light set deform with.
     pub fn deform_instance(
         &self,
         instance: usize,
@@ -118,20 +139,13 @@ impl Scene {
         t: Option<f32>,
     ) -> Option<Vec<DeformedVertices>> {
         let skin = self.instance_skin(instance);
-        let animated = self.has_animated_weights(instance);
-        if skin.is_none() && !animated {
+        if skin.is_none() && !self.has_animated_weights(instance) {
             return None;
         }
-        let node = self.instances[instance].node;
-        let weights = t.filter(|_| animated).and_then(|t| self.animations.iter().find_map(|a| a.weights_at(node?, t)));
         let joints = skin.map(|s| s.joint_matrices(node_world));
         let mesh = &self.meshes[self.instances[instance].mesh];
-        let deformed = mesh.primitives.iter().map(|p| {
-            // A sample whose weights do not morph (not finite, or moving a vertex to infinity) keeps the rest pose.
-            let morphed = match (&weights, &p.morph) {
-                (Some(w), Some(source)) => super::morph::morphed(source, w).ok(),
-                _ => None,
-            };
+        let morphed = self.morph_instance(instance, t);
+        let deformed = mesh.primitives.iter().zip(morphed).map(|(p, morphed)| {
             let p = morphed.as_ref().unwrap_or(p);
             match &joints {
                 Some(joints) => skin_vertices(p, joints),

@@ -214,6 +214,16 @@ impl Access {
         stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
         access: vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
     };
+    /// A build's reads of its vertex and index buffers (Vulkan 1.3 §37.2: `SHADER_READ` in the build stage).
+    pub const AS_BUILD_INPUT_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+        access: vk::AccessFlags2::SHADER_READ,
+    };
+    /// Vertex buffers read by a draw.
+    pub const VERTEX_INPUT_READ: Access = Access {
+        stage: vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT,
+        access: vk::AccessFlags2::VERTEX_ATTRIBUTE_READ,
+    };
     pub const AS_COMPUTE_READ: Access = Access {
         stage: vk::PipelineStageFlags2::COMPUTE_SHADER,
         access: vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
