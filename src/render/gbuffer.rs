@@ -132,6 +132,31 @@ impl<'m> GBufferInputs<'m> {
     }
 }
 
+/// `GBufferInputs::order` and `GBufferInputs::draw_of`: (mesh, primitive) and (instance, material) per draw.
+type DrawOrder = (Vec<(usize, usize)>, Vec<(usize, u32)>);
+
+/// Every (mesh, primitive) draw and its (instance, material), nearest first: the distance from the camera at the
+/// shutter's opening to the centre of the primitive's box where its instance rests (ties in scene order). The
+/// depth test keeps the nearest surface whatever the order, but llvmpipe tests depth before it shades, so a far
+/// wall drawn after the boxes in front of it shades only the pixels they leave: the Cornell box's pass took 36 ms
+/// drawn nearest first against 51–55 ms in scene order (docs/performance.md, "Draws nearest first").
+fn draws_front_to_back(scene: &Scene, gpu_scene: &GpuScene) -> DrawOrder {
+    let default_material = scene.materials.len() as u32;
+    let eye = scene.camera_at(scene.shutter.0).world_from_camera.w_axis.truncate();
+    let mut draws = Vec::new();
+    for (i, instance) in scene.instances.iter().enumerate() {
+        for (p, primitive) in gpu_scene.meshes[instance.mesh].primitives.iter().enumerate() {
+            let distance = instance.world_from_object.transform_point3(primitive.center).distance(eye);
+            let material = primitive.material.map(|m| m as u32).unwrap_or(default_material);
+            draws.push((distance, (instance.mesh, p), (i, material)));
+        }
+    }
+    // A stable sort by a total order (a degenerate transform's NaN distance has its place too): equal distances
+    // keep the scene's order, and every process that renders the frame draws in the same order.
+    draws.sort_by(|a, b| a.0.total_cmp(&b.0));
+    draws.into_iter().map(|(_, draw, of)| (draw, of)).unzip()
+}
+
 pub struct GBufferPass {
     pipeline: Pipeline,
     device: Arc<Device>,
@@ -226,15 +251,7 @@ impl GBufferPass {
         materials: &'m GBufferMaterials,
         slots: u32,
     ) -> Result<GBufferInputs<'m>> {
-        let default_material = scene.materials.len() as u32;
-        let mut order = Vec::new();
-        let mut draw_of = Vec::new();
-        for (i, instance) in scene.instances.iter().enumerate() {
-            for (p, primitive) in gpu_scene.meshes[instance.mesh].primitives.iter().enumerate() {
-                draw_of.push((i, primitive.material.map(|m| m as u32).unwrap_or(default_material)));
-                order.push((instance.mesh, p));
-            }
-        }
+        let (order, draw_of) = draws_front_to_back(scene, gpu_scene);
         let slots = slots.max(1);
         let bytes = (order.len().max(1) * std::mem::size_of::<GBufferDraw>()) as u64 * u64::from(slots);
         let draws = Buffer::new(

@@ -23,6 +23,8 @@ pub struct GpuPrimitive {
     pub index_count: u32,
     pub vertex_count: u32,
     pub material: Option<usize>,
+    /// The centre of its vertices' bounding box, in object space: where the G-buffer pass sorts its draws from.
+    pub center: Vec3,
 }
 
 pub struct GpuMesh {
@@ -84,11 +86,23 @@ impl GpuScene {
                     index_count: p.indices.len() as u32,
                     vertex_count: p.positions.len() as u32,
                     material: p.material,
+                    center: bounds_center(&p.positions),
                 });
             }
             meshes.push(GpuMesh { name: mesh.name.clone(), primitives });
         }
         Ok(Self { meshes })
+    }
+}
+
+/// The centre of the box around `positions` (the origin for none).
+fn bounds_center(positions: &[Vec3]) -> Vec3 {
+    let lo = positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
+    let hi = positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+    if lo.x <= hi.x {
+        0.5 * (lo + hi)
+    } else {
+        Vec3::ZERO
     }
 }
 
