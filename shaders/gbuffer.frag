@@ -18,7 +18,6 @@ layout(location = 2) in vec2 in_uv;
 layout(location = 3) in vec4 in_color;
 layout(location = 4) in vec3 in_dpdu;
 layout(location = 5) in vec3 in_dpdv;
-layout(location = 6) flat in uint in_draw;
 layout(location = 7) in vec2 in_uv1;
 
 // The fragment reads material textures by its implicit derivatives (material.glsl's contract).
@@ -27,7 +26,7 @@ vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
 }
 
 void main() {
-    GBufferDraw d = draws[in_draw];
+    GBufferDraw d = draws[pc.draw];
     GpuMaterial m = materials[d.material];
 
     // The face normal from screen-space derivatives, turned to the interpolated normal's side.

@@ -18,7 +18,6 @@ layout(location = 2) out vec2 out_uv;
 layout(location = 3) out vec4 out_color;
 layout(location = 4) out vec3 out_dpdu;
 layout(location = 5) out vec3 out_dpdv;
-layout(location = 6) flat out uint out_draw;
 layout(location = 7) out vec2 out_uv1;
 
 void main() {
@@ -34,5 +33,4 @@ void main() {
     out_uv = in_uv;
     out_uv1 = in_uv1;
     out_color = in_color;
-    out_draw = gl_InstanceIndex;
 }

@@ -139,6 +139,10 @@ layout(push_constant, std430) uniform GBufferPush {
     mat4 clip_from_world;
     // Third row of view_from_world: view depth = -dot(view_z_row, vec4(p, 1)).
     vec4 view_z_row;
+    // The draw record this draw reads (draws[draw]), pushed before each draw: a push constant is uniform over
+    // the draw, so llvmpipe branches on its material's fields instead of running every branch under a mask, as it
+    // did for a flat varying.
+    uint draw;
 } pc;
 #endif
 #endif

@@ -138,8 +138,8 @@ type DrawOrder = (Vec<(usize, usize)>, Vec<(usize, u32)>);
 /// Every (mesh, primitive) draw and its (instance, material), nearest first: the distance from the camera at the
 /// shutter's opening to the centre of the primitive's box where its instance rests (ties in scene order). The
 /// depth test keeps the nearest surface whatever the order, but llvmpipe tests depth before it shades, so a far
-/// wall drawn after the boxes in front of it shades only the pixels they leave: the Cornell box's pass took 36 ms
-/// drawn nearest first against 51–55 ms in scene order (docs/performance.md, "Draws nearest first").
+/// wall drawn after the boxes in front of it shades only the pixels they leave (docs/performance.md, "The
+/// G-buffer pass: draws nearest first").
 fn draws_front_to_back(scene: &Scene, gpu_scene: &GpuScene) -> DrawOrder {
     let default_material = scene.materials.len() as u32;
     let eye = scene.camera_at(scene.shutter.0).world_from_camera.w_axis.truncate();
@@ -311,8 +311,12 @@ impl GBufferPass {
                 })
                 .collect();
             crate::vk::commands::begin_cleared_rendering(device, cmd, gbuffer.extent, &colors, &gbuffer.depth);
-            let push =
-                GBufferPush { clip_from_world: sample.clip_from_world(), view_z_row: sample.view_from_world.row(2) };
+            let push = GBufferPush {
+                clip_from_world: sample.clip_from_world(),
+                view_z_row: sample.view_from_world.row(2),
+                draw: 0,
+                pad: [0; 3],
+            };
             self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
             let first_draw = slot as usize * inputs.order.len();
             for (draw_index, &(mesh, p)) in inputs.order.iter().enumerate() {
@@ -338,7 +342,15 @@ impl GBufferPass {
                         offsets[stream] = offset;
                     }
                 }
+                let draw = (first_draw + draw_index) as u32;
                 unsafe {
+                    device.raw.cmd_push_constants(
+                        cmd,
+                        self.pipeline.layout,
+                        vk::ShaderStageFlags::ALL,
+                        GBufferPush::DRAW_OFFSET,
+                        bytemuck::bytes_of(&draw),
+                    );
                     device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &offsets);
                     device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
                     // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).

@@ -63,6 +63,14 @@ pub fn bytes_per_pixel() -> usize {
 pub struct GBufferPush {
     pub clip_from_world: Mat4,
     pub view_z_row: Vec4,
+    /// The draw record of the draw (set before each draw; `GBufferPush::DRAW_OFFSET`).
+    pub draw: u32,
+    pub pad: [u32; 3],
+}
+
+impl GBufferPush {
+    /// Where `draw` is in the block: the one member pushed again before each draw.
+    pub const DRAW_OFFSET: u32 = std::mem::offset_of!(GBufferPush, draw) as u32;
 }
 
 #[repr(C)]
