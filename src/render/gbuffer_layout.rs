@@ -359,7 +359,9 @@ mod tests {
 
     #[test]
     fn layouts_match_glsl_std430() {
-        assert_eq!(size_of::<GBufferPush>(), 80);
+        // 84 bytes of GLSL block, padded to 16 (within the 128 bytes every device offers).
+        assert_eq!(size_of::<GBufferPush>(), 96);
+        assert_eq!(GBufferPush::DRAW_OFFSET, 80);
         assert_eq!(size_of::<GBufferDraw>(), 128);
         assert_eq!(offset_of!(GBufferDraw, normal_rows), 64);
         assert_eq!(offset_of!(GBufferDraw, material), 112);
