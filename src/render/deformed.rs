@@ -43,10 +43,9 @@ pub struct DeformedPrimitive {
 struct SkinnedPrimitive {
     influences: Buffer,
     set_count: u32,
-    /// The mesh's streams (one copy, device-local), or, where a clip animates the morph weights, `slots` copies
-    /// the host morphs into (host-visible).
+    /// The mesh's streams (one copy, device-local), or, where its instance morphs (`DeformedInstance::morphs`),
+    /// `slots` copies the host morphs into (host-visible).
     source: Streams,
-    morphs: bool,
 }
 
 impl DeformedPrimitive {
@@ -90,6 +89,8 @@ pub struct DeformedInstance {
     /// A skinned instance's joint matrices, `joint_count` per slot (host-visible).
     joints: Option<Buffer>,
     joint_count: u32,
+    /// A clip animates its morph weights: the host morphs it per slot.
+    morphs: bool,
 }
 
 /// The moving vertex streams of every deformed instance, `slots` samples' worth.
@@ -134,7 +135,7 @@ impl SkinnedPrimitive {
         }
         let influences =
             Buffer::device_local_with_data(device, &format!("{name} joint influences"), &influences, usage, 16)?;
-        Ok(Self { influences, set_count: loaded.skin_influences.len() as u32, source, morphs })
+        Ok(Self { influences, set_count: loaded.skin_influences.len() as u32, source })
     }
 }
 
@@ -191,7 +192,7 @@ impl DeformedStreams {
                 None => None,
             };
             index_of[instance] = Some(instances.len());
-            instances.push(DeformedInstance { instance, primitives, joints, joint_count });
+            instances.push(DeformedInstance { instance, primitives, joints, joint_count, morphs });
         }
         let any_skin = instances.iter().any(|i| i.joints.is_some());
         let skinning = if any_skin { Some(SkinningPass::new(device)?) } else { None };
@@ -226,8 +227,8 @@ impl DeformedStreams {
                 joints
                     .write(u64::from(slot) * u64::from(deformed.joint_count) * 64, bytemuck::cast_slice(&matrices))?;
             }
-            let morphs = deformed.primitives.iter().any(|p| p.skinning.as_ref().is_some_and(|s| s.morphs));
-            if deformed.joints.is_some() && !morphs {
+            // A deformed instance that does not morph is skinned: its joint matrices are all it needs.
+            if !deformed.morphs {
                 continue;
             }
             // Morphed at t (GpuScene leaves out primitives without triangles; so do the streams), then written
@@ -267,7 +268,7 @@ impl DeformedStreams {
                         continue;
                     }
                     let offset = gpu.offset(slot);
-                    let source_offset = if skinning.morphs { offset } else { 0 };
+                    let source_offset = if deformed.morphs { offset } else { 0 };
                     let [positions, normals, dpdu, dpdv] =
                         skinning.source.each_ref().map(|b| b.address + source_offset);
                     let push = SkinPush {
