@@ -22,6 +22,7 @@ const OP_DECORATE: u32 = 71;
 const OP_MEMBER_DECORATE: u32 = 72;
 const DECORATION_BINDING: u32 = 33;
 const DECORATION_OFFSET: u32 = 35;
+const OP_CONTROL_BARRIER: u32 = 224;
 
 fn parse(words: &[u32]) -> Module {
     strata::vk::spirv::parse(words).unwrap()
@@ -294,6 +295,33 @@ fn every_pass_declares_the_bindings_and_workgroup_size_the_rust_side_uses() {
         problems.extend(pass_problems(&modules, &rust, local_size));
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// How many workgroup barriers (OpControlBarrier) a module's instructions hold.
+fn control_barriers(words: &[u32]) -> usize {
+    let (mut i, mut found) = (5, 0);
+    while i < words.len() {
+        let count = (words[i] >> 16) as usize;
+        found += usize::from(words[i] & 0xffff == OP_CONTROL_BARRIER);
+        i += count.max(1);
+    }
+    found
+}
+
+/// The accumulation pass holds no workgroup barrier, either way it traces: lavapipe compiles a compute shader whose
+/// module holds one (even one a specialization constant leaves unreached) so that each 8-lane vector can stop
+/// there, which cost the pass about a quarter of its time (docs/performance.md, "No barrier in the accumulation
+/// pass"). The check can fail: the same module with one barrier added is caught.
+#[test]
+fn the_accumulation_pass_holds_no_workgroup_barrier() {
+    for name in ["accumulate.comp", "accumulate.rgen"] {
+        let (_, bytes) = strata::shaders::ALL.iter().find(|(n, _)| *n == name).unwrap();
+        let mut words = ash::util::read_spv(&mut std::io::Cursor::new(bytes)).unwrap();
+        assert_eq!(control_barriers(&words), 0, "{name} holds a workgroup barrier");
+        // OpControlBarrier %workgroup %workgroup %semantics: any ids will do for the count.
+        words.extend([(4 << 16) | OP_CONTROL_BARRIER, 1, 1, 1]);
+        assert_eq!(control_barriers(&words), 1, "{name}: an added barrier is not seen");
+    }
 }
 
 /// A compute shader's workgroup size; None for graphics stages.

@@ -15,9 +15,8 @@ layout(constant_id = 1) const uint ALPHA_TESTED = 0u;
 // constant_id 2 is accumulate.rgen's PIXEL_RUNS.
 layout(constant_id = 3) const uint HAS_ENVIRONMENT = 0u;
 // 1: paths may go on past the visible surface (--bounces above 0, or BSDF sampling alone, whose rays gather
-// light past the last vertex); 0: they never do, and the pipeline holds no chain code (in the compute shader no
-// chain packing either, whose barriers make lavapipe run each workgroup's lanes as coroutines). Direct light
-// alone then costs about 15% less per sample and 0.25 s less pipeline creation (docs/performance.md).
+// light past the last vertex); 0: they never do, and the pipeline holds no chain code. Direct light alone then
+// costs less per sample and about 0.25 s less pipeline creation (docs/performance.md).
 layout(constant_id = 4) const uint CHAINS = 1u;
 // 1: some transmissive material disperses (KHR_materials_dispersion, dispersion.glsl); 0: none, and the pipeline
 // holds none of its code (which also keeps every other scene's pixels the bits they were before it).

@@ -36,7 +36,6 @@ struct ChainRay {
     vec3 dir;
     uint pixel;
     vec3 throughput;
-    uint lane;  // the invocation whose pixel it belongs to
     vec2 cone;  // the ray cone: width at the origin, spread angle (pixel_cone)
     vec2 t_range;  // where along the ray a hit counts: the camera's near and far depths, or (0, 1e30)
     uint depth;    // the vertex the ray leads to
@@ -190,10 +189,9 @@ bool gbuffer_vertex(inout ChainRay r, out Surface s, out vec3 v, out vec3 backgr
 
 // A path of pixel `pixel` before its visible vertex: in the reference mode its camera ray through its own sub-pixel
 // point and lens point.
-ChainRay start_path(uvec2 pixel, uint lane) {
+ChainRay start_path(uvec2 pixel) {
     ChainRay r;
     r.pixel = pixel.y * pc.width + pixel.x;
-    r.lane = lane;
     r.depth = 0u;
     r.pdf = 0.0;
     r.throughput = vec3(1.0);

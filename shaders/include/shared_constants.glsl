@@ -22,15 +22,15 @@ const uint ACCUMULATE_BINDING_TEXTURES = 11u;
 // j / (ROUGHNESS_STEPS - 1).
 const uint SPECULAR_ALBEDO_MU_STEPS = 64u;
 const uint SPECULAR_ALBEDO_ROUGHNESS_STEPS = 32u;
-// The side of the accumulation compute shader's square workgroup: one tile of its tile queue.
+// The side of the accumulation compute shader's square workgroup, whose tile its subgroups split into runs.
 const uint ACCUMULATE_TILE_SIZE = 8u;
 // The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device
 // (accumulate.rgen's PIXEL_RUNS; lavapipe runs a pipeline as a compute shader of 8-lane workgroups).
 const uint ACCUMULATE_RUN_LENGTH = 8u;
-// Counters per sample slot (binding 8): shadow rays, secondary rays, the next tile to shade (accumulate.comp).
+// Counters per sample slot (binding 8): shadow rays, secondary rays, the next run of pixels to shade (accumulate.comp).
 const uint COUNTER_SHADOW_RAYS = 0u;
 const uint COUNTER_SECONDARY_RAYS = 1u;
-const uint COUNTER_NEXT_TILE = 2u;
+const uint COUNTER_NEXT_RUN = 2u;
 const uint COUNTERS_PER_SLOT = 3u;
 // What pixels no surface covers show (pc.background.w; render::frame): the background colour, the environment,
 // or nothing (alpha 0, no radiance).

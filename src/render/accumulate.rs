@@ -1,8 +1,8 @@
 //! The accumulation pass: per pixel, it reads the G-buffer (or, in the reference mode, traces the pixel's own
 //! primary ray), casts shadow, gloss and translucency rays against the TLAS, and adds the sample's radiance to
 //! the pixel's fixed-point sums. One shading body (`shaders/include/path_tracer.glsl`) traces in one of two
-//! ways ([`TracePath`]): with ray queries in a compute shader (`accumulate.comp`), whose workgroups take the
-//! image's 8×8 tiles from a queue (a counter per sample) so that threads that finish early take more
+//! ways ([`TracePath`]): with ray queries in a compute shader (`accumulate.comp`), whose subgroups take runs of
+//! an 8×8 tile's pixels from a queue (a counter per sample) so that threads that finish early take more
 //! ([`workgroups_for`]); or through a ray-tracing pipeline (`accumulate.rgen`, with hit shaders that only record
 //! the hit and run the alpha test), for devices without ray queries: one invocation per pixel on a GPU, and on a
 //! CPU device a few rows of 8 invocations that deal 8-pixel runs of the image out in turn, for the same reason
@@ -23,7 +23,8 @@ use anyhow::{anyhow, Result};
 use ash::vk;
 use std::sync::Arc;
 
-/// One tile of the compute shader's queue is one workgroup of LOCAL_SIZE × LOCAL_SIZE invocations.
+/// The compute shader's workgroups are LOCAL_SIZE × LOCAL_SIZE invocations, the size of the tiles whose rows its
+/// subgroups take from the queue.
 const LOCAL_SIZE: u32 = crate::shaders::constants::ACCUMULATE_TILE_SIZE;
 
 /// How the pass traces its rays on a device (`Trace` resolved).
@@ -137,7 +138,8 @@ pub enum AccumulateLaunch {
     /// [`CPU_PIPELINE_INVOCATIONS`]); on a GPU one workgroup per tile or one invocation per pixel.
     #[default]
     DeviceDefault,
-    /// This many workgroups share the work: with ray queries they take 8×8 tiles from a queue; through the
+    /// This many workgroups share the work: with ray queries their subgroups take runs of 8×8 tiles' pixels from a
+    /// queue; through the
     /// pipeline, rows of 8 invocations take 8-pixel runs in turn.
     Workgroups(u32),
     /// A GPU's launch on any device: one workgroup per tile (ray queries), one invocation per pixel (pipeline).
@@ -343,7 +345,7 @@ impl AccumulatePass {
 
     /// Records one sample's dispatch (or trace), unlabelled: it is the work of the frame graph's accumulate pass
     /// (labelled [`Self::label`]), whose uses make the G-buffer readable and the TLAS built; the host zeroed the
-    /// sample's counters (its tile queue starts at the first tile).
+    /// sample's counters (its queue starts at the first run).
     pub fn record(&self, cmd: vk::CommandBuffer, set: &DescriptorSet, push: &AccumulatePush) {
         let device = &self.device;
         let device_type = device.report.device_type;
@@ -392,18 +394,17 @@ const RUN_LENGTH: u32 = crate::shaders::constants::ACCUMULATE_RUN_LENGTH;
 pub const CPU_PIPELINE_INVOCATIONS: u32 = RUN_LENGTH * CPU_WORKGROUPS;
 
 /// The most workgroups one dispatch of the pass launches: the least `maxComputeWorkGroupCount[0]` the Vulkan
-/// spec lets a device report. Each workgroup loops over tiles, so fewer workgroups than tiles still cover the image.
+/// spec lets a device report. Each subgroup loops over runs, so fewer workgroups than tiles still cover the image.
 const MAX_WORKGROUPS: u32 = 65_535;
 
 /// Workgroups a CPU device gets: more than a CPU driver runs threads (llvmpipe caps them at its LP_MAX_THREADS),
 /// so every thread has one, and few enough that the rest, which find the queue empty, cost next to nothing.
 const CPU_WORKGROUPS: u32 = 256;
 
-/// How many workgroups share a sample's `tiles` (8×8 pixels each). The shader takes tiles from a queue, so any
-/// number gives the same picture; what it changes is speed. A GPU gets one per tile (up to `MAX_WORKGROUPS`), as
-/// many as it can keep resident. A CPU device runs one workgroup per thread at a time and pays for every one it
-/// starts (lavapipe zeroes each 8-lane coroutine's frame, about 18 KiB for this shader), so it gets only
-/// `CPU_WORKGROUPS`.
+/// How many workgroups share a sample's `tiles` (8×8 pixels each). The shader takes runs of them from a queue, so
+/// any number gives the same picture; what it changes is speed. A GPU gets one per tile (up to `MAX_WORKGROUPS`),
+/// as many as it can keep resident. A CPU device runs one workgroup per thread at a time and pays for every one it
+/// starts, so it gets only `CPU_WORKGROUPS`.
 pub fn workgroups_for(tiles: u32, device_type: vk::PhysicalDeviceType) -> u32 {
     let wanted = if device_type == vk::PhysicalDeviceType::CPU { tiles.min(CPU_WORKGROUPS) } else { tiles };
     wanted.clamp(1, MAX_WORKGROUPS)

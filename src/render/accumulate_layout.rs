@@ -154,8 +154,8 @@ pub struct ResolvePush {
     pub pad: [u32; 2],
 }
 
-/// Counters per sample slot: shadow rays, secondary rays, and the next tile a workgroup takes (the accumulation
-/// pass's tile queue; zeroed with the rest before each batch). Defined in shared_constants.glsl.
+/// Counters per sample slot: shadow rays, secondary rays, and the next run of pixels a subgroup takes (the
+/// accumulation pass's queue; zeroed with the rest before each batch). Defined in shared_constants.glsl.
 pub const COUNTERS_PER_SLOT: usize = crate::shaders::constants::COUNTERS_PER_SLOT as usize;
 pub const COUNTER_SHADOW_RAYS: usize = crate::shaders::constants::COUNTER_SHADOW_RAYS as usize;
 pub const COUNTER_SECONDARY_RAYS: usize = crate::shaders::constants::COUNTER_SECONDARY_RAYS as usize;

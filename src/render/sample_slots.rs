@@ -210,7 +210,7 @@ impl<'a> SampleSlots<'a> {
         graph.pass(cmd, "TLAS build", &builds, || self.tlas.record_build(cmd, slot));
     }
 
-    /// Zeroes the ray counters (and tile queues) of `slots` slots before a batch.
+    /// Zeroes the ray counters (and the queues of pixel runs) of `slots` slots before a batch.
     pub fn reset_counters(&mut self, slots: u32) -> Result<()> {
         self.counters.write(0, &vec![0u8; counter_bytes(slots) as usize])
     }

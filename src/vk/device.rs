@@ -163,9 +163,10 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
     }
 
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let (mut driver_name, mut driver_info) = (String::new(), String::new());
     if properties.api_version >= vk::API_VERSION_1_2 {
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver).push_next(&mut subgroup);
         unsafe { raw.get_physical_device_properties2(handle, &mut props2) };
         driver_name = driver.driver_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         driver_info = driver.driver_info_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -200,6 +201,12 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         }
         if has(ash::khr::ray_tracing_pipeline::NAME) && queried.ray_tracing_pipeline.ray_tracing_pipeline == vk::FALSE {
             missing_for_pipeline.push("feature rayTracingPipeline".into());
+        }
+        // accumulate.comp's subgroups take their runs of pixels from the queue with a ballot (subgroupBroadcastFirst).
+        let compute_ballot = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT);
+        if !compute_ballot {
+            missing_for_query.push("subgroup ballot operations in compute shaders".into());
         }
         ray_query = missing_for_query.is_empty();
         ray_tracing_pipeline = missing_for_pipeline.is_empty();
