@@ -9,6 +9,7 @@
 #extension GL_EXT_nonuniform_qualifier : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 #define GBUFFER_LAYOUT_STRUCTS_ONLY
 #include "gbuffer_layout.glsl"
 #include "accumulate_layout.glsl"
@@ -23,19 +24,56 @@
 layout(local_size_x = ACCUMULATE_TILE_SIZE, local_size_y = ACCUMULATE_TILE_SIZE) in;
 const uint GROUP_SIZE = gl_WorkGroupSize.x * gl_WorkGroupSize.y;
 
+// The lane that holds the n-th (from 0) set bit of a subgroup ballot.
+uint nth_set_lane(uvec4 ballot, uint n) {
+    for (uint word = 0u; word < 4u; word++) {
+        uint bits = ballot[word];
+        uint count = uint(bitCount(bits));
+        if (n < count) {
+            for (uint i = 0u; i < n; i++) bits &= bits - 1u;
+            return word * 32u + uint(findLSB(bits));
+        }
+        n -= count;
+    }
+    return 0u;
+}
+
+// Lane `lane`'s chain ray, field by field (subgroupShuffle takes no structs): every field of ChainRay (path.glsl).
+ChainRay shuffle_chain(ChainRay r, uint lane) {
+    ChainRay s;
+    s.origin = subgroupShuffle(r.origin, lane);
+    s.pdf = subgroupShuffle(r.pdf, lane);
+    s.dir = subgroupShuffle(r.dir, lane);
+    s.pixel = subgroupShuffle(r.pixel, lane);
+    s.throughput = subgroupShuffle(r.throughput, lane);
+    s.cone = subgroupShuffle(r.cone, lane);
+    s.t_range = subgroupShuffle(r.t_range, lane);
+    s.depth = subgroupShuffle(r.depth, lane);
+    s.gather_only = subgroupShuffle(r.gather_only, lane);
+    s.channel = subgroupShuffle(r.channel, lane);
+    return s;
+}
+
 // Each subgroup shades runs of pixels until the sample's counter passes the last one (persistent threads: Aila and
 // Laine, "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009). A run is a subgroup's width of an
 // 8×8 tile's pixels in row order: on lavapipe (8 lanes) one row of a tile, on a GPU a few. Runs cost very
 // different amounts (sky, a diffuse wall, glass), and lavapipe hands each thread one fixed, contiguous stretch of
 // a dispatch's workgroups (lp_cs_tpool), so with fixed work per workgroup the thread with the costlier half of the
 // image ran on alone for much of the pass (docs/performance.md); taken from a shared counter, runs go to whichever
-// thread is free. Which subgroup shades a run changes nothing in it, and a pixel always shares its SIMD vector with
-// the same neighbours (lavapipe's texture filtering can round a lane differently by what the other lanes read), so
-// the picture is the same bits, and the same as accumulate.rgen's, whose 8-pixel runs are these rows.
+// thread is free. A pixel's visible vertex always shares its SIMD vector with the same neighbours (lavapipe's
+// texture filtering can round a lane differently by what the other lanes read), so which subgroup shades a run
+// changes nothing in it, and the picture is accumulate.rgen's bits, whose 8-pixel runs are these rows.
 //
-// No workgroup barrier: lavapipe compiles a compute shader whose module holds one, even one never reached, so that
-// each 8-lane vector can stop there, and that alone cost the pass about a quarter of its time (docs/performance.md,
-// "No barrier in the accumulation pass").
+// Chains are gathered: lavapipe runs a subgroup's lanes as one vector, so a chain in any lane makes every lane
+// wait for it. With one path per camera sample a path whose chain goes on hands its chain ray to a free slot
+// (any lane's, by shuffles) and its lane goes on to the next run; the slots' chains are shaded together once they
+// fill the vector (and at the end), each then adding its path's value to its pixel. With several paths a pixel
+// sums them in order, so each lane follows its own chains, as accumulate.rgen does.
+//
+// No workgroup barrier, and no shared memory: lavapipe compiles a compute shader whose module holds a barrier, even
+// one never reached, so that each 8-lane vector can stop there, and that alone cost the pass about a quarter of its
+// time (docs/performance.md, "No barrier in the accumulation pass"). Every branch on which subgroup operations
+// follow is uniform in the subgroup.
 void main() {
     uint tiles_x = (pc.width + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
     uint tiles = tiles_x * ((pc.height + gl_WorkGroupSize.y - 1u) / gl_WorkGroupSize.y);
@@ -45,17 +83,104 @@ void main() {
     uint runs_per_tile = GROUP_SIZE / width;
     uint shadow_rays = 0u;
     uint secondary_rays = 0u;
+    // Uniform: a push constant.
+    bool gather = pc.shading_samples == 1u;
+    // The lane's pixel of the current run, the path of it shaded next (k == pc.shading_samples: take a new run) and
+    // the sum of its paths so far.
+    uvec2 pixel = uvec2(0u);
+    bool in_image = false;
+    uint k = pc.shading_samples;
+    vec4 paths_sum = vec4(0.0);
+    // The path whose visible vertex the lane shaded last: its chain ray, its value, whether its chain waits for a slot.
+    ChainRay fresh = start_path(uvec2(0u));
+    vec4 fresh_value = vec4(0.0);
+    bool fresh_waits = false;
+    // The lane's slot: a chain ray, from any lane, and the value of its path's visible vertex.
+    ChainRay held = fresh;
+    vec4 held_value = vec4(0.0);
+    bool holds = false;
+    // Uniform in the subgroup, as every condition below that subgroup operations follow.
+    uint held_count = 0u;
+    bool runs_left = true;
     for (;;) {
-        uint run = 0u;
-        if (subgroupElect()) run = atomicAdd(counters[slot + COUNTER_NEXT_RUN], 1u);
-        // Uniform in the subgroup: the elected lane is its first active one.
-        run = subgroupBroadcastFirst(run);
-        uint tile = run / runs_per_tile;
-        if (tile >= tiles) break;
-        uint lane = (run % runs_per_tile) * width + gl_SubgroupInvocationID;
-        uvec2 pixel = uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy +
-                      uvec2(lane % gl_WorkGroupSize.x, lane / gl_WorkGroupSize.x);
-        if (pixel.x < pc.width && pixel.y < pc.height) shade_pixel(pixel, shadow_rays, secondary_rays);
+        bool chain_round = held_count == width || (held_count > 0u && (!gather || !runs_left));
+        if (!chain_round) {
+            if (!runs_left) break;
+            if (k == pc.shading_samples) {
+                uint run = 0u;
+                if (subgroupElect()) run = atomicAdd(counters[slot + COUNTER_NEXT_RUN], 1u);
+                // The elected lane is the subgroup's first active one.
+                run = subgroupBroadcastFirst(run);
+                uint tile = run / runs_per_tile;
+                if (tile >= tiles) {
+                    runs_left = false;
+                    continue;
+                }
+                uint lane = (run % runs_per_tile) * width + gl_SubgroupInvocationID;
+                pixel = uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy +
+                        uvec2(lane % gl_WorkGroupSize.x, lane / gl_WorkGroupSize.x);
+                in_image = pixel.x < pc.width && pixel.y < pc.height;
+                k = 0u;
+                paths_sum = vec4(0.0);
+            }
+            begin_path(k);
+            fresh = start_path(pixel);
+        }
+        ChainRay r = chain_round ? held : fresh;
+        bool shading = chain_round ? holds : in_image;
+        bool goes_on = false;
+        vec4 part = vec4(0.0);
+        // The one call of the shading body (trace_path says why): a visible vertex, or a chain.
+        if (shading) part = trace_path(r, goes_on, shadow_rays, secondary_rays);
+        if (chain_round) {
+            // The chain's own sum added to its visible vertex's, as accumulate.rgen adds them.
+            vec4 value = held_value;
+            value.rgb += part.rgb;
+            if (gather && holds) accumulate_sample(uvec2(held.pixel % pc.width, held.pixel / pc.width), path_value(value), 1u);
+            if (!gather && holds) fresh_value = value;
+            holds = false;
+            held_count = 0u;
+        } else {
+            fresh = r;
+            fresh_value = part;
+            fresh_waits = shading && goes_on;
+            if (gather && shading && !goes_on) accumulate_sample(pixel, path_value(part), 1u);
+            // One path a pixel: the run's only path is shaded (its chain, if any, goes on from a slot).
+            if (gather) k = pc.shading_samples;
+        }
+        if (gather) {
+            // Waiting chains move into free slots, in lane order, as many as there are.
+            uvec4 waiting = subgroupBallot(fresh_waits);
+            uint waiting_count = subgroupBallotBitCount(waiting);
+            if (waiting_count > 0u) {
+                uint moved = min(waiting_count, width - held_count);
+                uint slot_rank = subgroupBallotExclusiveBitCount(subgroupBallot(!holds));
+                bool receives = !holds && slot_rank < moved;
+                uint source = receives ? nth_set_lane(waiting, slot_rank) : gl_SubgroupInvocationID;
+                ChainRay incoming = shuffle_chain(fresh, source);
+                vec4 incoming_value = subgroupShuffle(fresh_value, source);
+                if (receives) {
+                    held = incoming;
+                    held_value = incoming_value;
+                    holds = true;
+                }
+                if (fresh_waits && subgroupBallotExclusiveBitCount(waiting) < moved) fresh_waits = false;
+                held_count += moved;
+            }
+        } else {
+            // Several paths a pixel: its chain is its lane's own, shaded in the next round, before the next path.
+            if (!chain_round) {
+                held = fresh;
+                held_value = fresh_value;
+                holds = fresh_waits;
+                held_count = subgroupBallotBitCount(subgroupBallot(holds));
+            }
+            if (chain_round || held_count == 0u) {
+                if (in_image) paths_sum += path_value(fresh_value);
+                k++;
+                if (k == pc.shading_samples && in_image) accumulate_sample(pixel, paths_sum, pc.shading_samples);
+            }
+        }
     }
     if (shadow_rays != 0u) atomicAdd(counters[slot + COUNTER_SHADOW_RAYS], shadow_rays);
     if (secondary_rays != 0u) atomicAdd(counters[slot + COUNTER_SECONDARY_RAYS], secondary_rays);

@@ -36,26 +36,4 @@ void accumulate_sample(uvec2 pixel, vec4 paths_sum, uint paths) {
     sums[i] += to_fixed_point(value);
 }
 
-// One pixel's camera sample: pc.shading_samples paths, each its visible vertex and then its chain through one call
-// site of the shading body (trace_path says why), their mean into the pixel's fixed-point sums. Each lane follows
-// its own pixel's chain: packing a workgroup's chains into its first lanes needs barriers, which cost lavapipe more
-// than the packing saved (docs/performance.md, "No barrier in the accumulation pass").
-void shade_pixel(uvec2 pixel, inout uint shadow_rays, inout uint secondary_rays) {
-    vec4 paths_sum = vec4(0.0);
-    // Uniform: a push constant.
-    for (uint k = 0u; k < pc.shading_samples; k++) {
-        begin_path(k);
-        ChainRay r = start_path(pixel);
-        vec4 value = vec4(0.0);
-        // The visible vertex, then its chain: two rounds of one call (the chain's own sum added to the vertex's).
-        for (uint round = 0u; round < 2u; round++) {
-            bool goes_on;
-            vec4 part = trace_path(r, goes_on, shadow_rays, secondary_rays);
-            if (round == 0u) value = part; else value.rgb += part.rgb;
-            if (!goes_on) break;
-        }
-        paths_sum += path_value(value);
-    }
-    accumulate_sample(pixel, paths_sum, pc.shading_samples);
-}
 #endif

@@ -202,11 +202,13 @@ fn report_device(instance: &Instance, index: usize, handle: vk::PhysicalDevice) 
         if has(ash::khr::ray_tracing_pipeline::NAME) && queried.ray_tracing_pipeline.ray_tracing_pipeline == vk::FALSE {
             missing_for_pipeline.push("feature rayTracingPipeline".into());
         }
-        // accumulate.comp's subgroups take their runs of pixels from the queue with a ballot (subgroupBroadcastFirst).
-        let compute_ballot = subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
-            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT);
-        if !compute_ballot {
-            missing_for_query.push("subgroup ballot operations in compute shaders".into());
+        // accumulate.comp's subgroups take their runs of pixels from the queue (subgroupBroadcastFirst) and gather
+        // their chains (subgroupBallot, subgroupShuffle).
+        let needed = vk::SubgroupFeatureFlags::BALLOT | vk::SubgroupFeatureFlags::SHUFFLE;
+        if !subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            || !subgroup.supported_operations.contains(needed)
+        {
+            missing_for_query.push("subgroup ballot and shuffle operations in compute shaders".into());
         }
         ray_query = missing_for_query.is_empty();
         ray_tracing_pipeline = missing_for_pipeline.is_empty();
