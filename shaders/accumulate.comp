@@ -54,6 +54,46 @@ ChainRay shuffle_chain(ChainRay r, uint lane) {
     return s;
 }
 
+// A path's chain between lanes: its ray and the value of the path's visible vertex, and whether there is one (a
+// lane's own chain waiting for a slot, or a slot holding one).
+struct PendingChain {
+    ChainRay ray;
+    vec4 value;
+    bool present;
+};
+
+// The subgroup's next run from the sample's queue: false once the queue is past the last tile; else this lane's
+// pixel of it (which may lie past the image's edge in a partial tile).
+bool take_run(uint tiles_x, uint tiles, uint width, out uvec2 pixel) {
+    uint run = 0u;
+    if (subgroupElect()) run = atomicAdd(counters[COUNTERS_PER_SLOT * pc.counter_slot + COUNTER_NEXT_RUN], 1u);
+    // The elected lane is the subgroup's first active one.
+    run = subgroupBroadcastFirst(run);
+    uint runs_per_tile = GROUP_SIZE / width;
+    uint tile = run / runs_per_tile;
+    uint lane = (run % runs_per_tile) * width + gl_SubgroupInvocationID;
+    pixel = uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy +
+            uvec2(lane % gl_WorkGroupSize.x, lane / gl_WorkGroupSize.x);
+    return tile < tiles;
+}
+
+// Moves the waiting chains (`fresh`, present) into free slots (`held`, not present), in lane order, as many as
+// there are free; those that find none stay waiting. Returns how many slots are held now (`held_count` before).
+uint gather_waiting(inout PendingChain fresh, inout PendingChain held, uint held_count, uint width) {
+    uvec4 waiting = subgroupBallot(fresh.present);
+    uint waiting_count = subgroupBallotBitCount(waiting);
+    if (waiting_count == 0u) return held_count;
+    uint moved = min(waiting_count, width - held_count);
+    uint slot_rank = subgroupBallotExclusiveBitCount(subgroupBallot(!held.present));
+    bool receives = !held.present && slot_rank < moved;
+    uint source = receives ? nth_set_lane(waiting, slot_rank) : gl_SubgroupInvocationID;
+    ChainRay ray = shuffle_chain(fresh.ray, source);
+    vec4 value = subgroupShuffle(fresh.value, source);
+    if (receives) held = PendingChain(ray, value, true);
+    if (fresh.present && subgroupBallotExclusiveBitCount(waiting) < moved) fresh.present = false;
+    return held_count + moved;
+}
+
 // Each subgroup shades runs of pixels until the sample's counter passes the last one (persistent threads: Aila and
 // Laine, "Understanding the Efficiency of Ray Traversal on GPUs", HPG 2009). A run is a subgroup's width of an
 // 8×8 tile's pixels in row order: on lavapipe (8 lanes) one row of a tile, on a GPU a few. Runs cost very
@@ -77,111 +117,75 @@ ChainRay shuffle_chain(ChainRay r, uint lane) {
 void main() {
     uint tiles_x = (pc.width + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
     uint tiles = tiles_x * ((pc.height + gl_WorkGroupSize.y - 1u) / gl_WorkGroupSize.y);
-    uint slot = COUNTERS_PER_SLOT * pc.counter_slot;
     // Subgroup sizes are powers of two, so a width up to the workgroup's divides its 64 pixels.
     uint width = min(gl_SubgroupSize, GROUP_SIZE);
-    uint runs_per_tile = GROUP_SIZE / width;
     uint shadow_rays = 0u;
     uint secondary_rays = 0u;
-    // Uniform: a push constant.
-    bool gather = pc.shading_samples == 1u;
+    // Uniform: a push constant (and without chain code, a constant, so none of the gathering is compiled).
+    bool gather = CHAINS != 0u && pc.shading_samples == 1u;
     // The lane's pixel of the current run, the path of it shaded next (k == pc.shading_samples: take a new run) and
     // the sum of its paths so far.
     uvec2 pixel = uvec2(0u);
     bool in_image = false;
     uint k = pc.shading_samples;
     vec4 paths_sum = vec4(0.0);
-    // The path whose visible vertex the lane shaded last: its chain ray, its value, whether its chain waits for a slot.
-    ChainRay fresh = start_path(uvec2(0u));
-    vec4 fresh_value = vec4(0.0);
-    bool fresh_waits = false;
-    // The lane's slot: a chain ray, from any lane, and the value of its path's visible vertex.
-    ChainRay held = fresh;
-    vec4 held_value = vec4(0.0);
-    bool holds = false;
+    // The path whose visible vertex the lane shaded last (present: its chain waits for a slot), and the lane's slot.
+    PendingChain fresh = PendingChain(start_path(uvec2(0u)), vec4(0.0), false);
+    PendingChain held = fresh;
     // Uniform in the subgroup, as every condition below that subgroup operations follow.
     uint held_count = 0u;
     bool runs_left = true;
     for (;;) {
-        bool chain_round = held_count == width || (held_count > 0u && (!gather || !runs_left));
+        bool chain_round = CHAINS != 0u && (held_count == width || (held_count > 0u && (!gather || !runs_left)));
         if (!chain_round) {
             if (!runs_left) break;
             if (k == pc.shading_samples) {
-                uint run = 0u;
-                if (subgroupElect()) run = atomicAdd(counters[slot + COUNTER_NEXT_RUN], 1u);
-                // The elected lane is the subgroup's first active one.
-                run = subgroupBroadcastFirst(run);
-                uint tile = run / runs_per_tile;
-                if (tile >= tiles) {
-                    runs_left = false;
-                    continue;
-                }
-                uint lane = (run % runs_per_tile) * width + gl_SubgroupInvocationID;
-                pixel = uvec2(tile % tiles_x, tile / tiles_x) * gl_WorkGroupSize.xy +
-                        uvec2(lane % gl_WorkGroupSize.x, lane / gl_WorkGroupSize.x);
+                runs_left = take_run(tiles_x, tiles, width, pixel);
+                if (!runs_left) continue;
                 in_image = pixel.x < pc.width && pixel.y < pc.height;
                 k = 0u;
                 paths_sum = vec4(0.0);
             }
             begin_path(k);
-            fresh = start_path(pixel);
+            fresh.ray = start_path(pixel);
         }
-        ChainRay r = chain_round ? held : fresh;
-        bool shading = chain_round ? holds : in_image;
+        ChainRay r = chain_round ? held.ray : fresh.ray;
+        bool shading = chain_round ? held.present : in_image;
         bool goes_on = false;
         vec4 part = vec4(0.0);
         // The one call of the shading body (trace_path says why): a visible vertex, or a chain.
         if (shading) part = trace_path(r, goes_on, shadow_rays, secondary_rays);
         if (chain_round) {
             // The chain's own sum added to its visible vertex's, as accumulate.rgen adds them.
-            vec4 value = held_value;
+            vec4 value = held.value;
             value.rgb += part.rgb;
-            if (gather && holds) accumulate_sample(uvec2(held.pixel % pc.width, held.pixel / pc.width), path_value(value), 1u);
-            if (!gather && holds) fresh_value = value;
-            holds = false;
+            uint p = held.ray.pixel;
+            if (gather && held.present) accumulate_sample(uvec2(p % pc.width, p / pc.width), path_value(value), 1u);
+            if (!gather && held.present) fresh.value = value;
+            held.present = false;
             held_count = 0u;
         } else {
-            fresh = r;
-            fresh_value = part;
-            fresh_waits = shading && goes_on;
+            fresh = PendingChain(r, part, shading && goes_on);
             if (gather && shading && !goes_on) accumulate_sample(pixel, path_value(part), 1u);
             // One path a pixel: the run's only path is shaded (its chain, if any, goes on from a slot).
             if (gather) k = pc.shading_samples;
         }
         if (gather) {
-            // Waiting chains move into free slots, in lane order, as many as there are.
-            uvec4 waiting = subgroupBallot(fresh_waits);
-            uint waiting_count = subgroupBallotBitCount(waiting);
-            if (waiting_count > 0u) {
-                uint moved = min(waiting_count, width - held_count);
-                uint slot_rank = subgroupBallotExclusiveBitCount(subgroupBallot(!holds));
-                bool receives = !holds && slot_rank < moved;
-                uint source = receives ? nth_set_lane(waiting, slot_rank) : gl_SubgroupInvocationID;
-                ChainRay incoming = shuffle_chain(fresh, source);
-                vec4 incoming_value = subgroupShuffle(fresh_value, source);
-                if (receives) {
-                    held = incoming;
-                    held_value = incoming_value;
-                    holds = true;
-                }
-                if (fresh_waits && subgroupBallotExclusiveBitCount(waiting) < moved) fresh_waits = false;
-                held_count += moved;
-            }
+            held_count = gather_waiting(fresh, held, held_count, width);
         } else {
             // Several paths a pixel: its chain is its lane's own, shaded in the next round, before the next path.
             if (!chain_round) {
                 held = fresh;
-                held_value = fresh_value;
-                holds = fresh_waits;
-                held_count = subgroupBallotBitCount(subgroupBallot(holds));
+                held_count = CHAINS != 0u ? subgroupBallotBitCount(subgroupBallot(held.present)) : 0u;
             }
             if (chain_round || held_count == 0u) {
-                if (in_image) paths_sum += path_value(fresh_value);
+                if (in_image) paths_sum += path_value(fresh.value);
                 k++;
                 if (k == pc.shading_samples && in_image) accumulate_sample(pixel, paths_sum, pc.shading_samples);
             }
         }
     }
+    uint slot = COUNTERS_PER_SLOT * pc.counter_slot;
     if (shadow_rays != 0u) atomicAdd(counters[slot + COUNTER_SHADOW_RAYS], shadow_rays);
     if (secondary_rays != 0u) atomicAdd(counters[slot + COUNTER_SECONDARY_RAYS], secondary_rays);
 }

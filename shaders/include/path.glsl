@@ -28,7 +28,8 @@ vec3 lights_along(vec3 o, vec3 d, float t_max, out float density) {
 }
 
 // Where a path stands between two vertices: the next ray and what it carries. Vertex 0 is the visible surface:
-// the G-buffer's, or where the camera ray (the reference mode) hits.
+// the G-buffer's, or where the camera ray (the reference mode) hits. accumulate.comp moves chain rays between
+// lanes field by field (shuffle_chain): a field added here goes there too.
 struct ChainRay {
     vec3 origin;
     // Solid-angle density of a reflection (for MIS), 0 for a refraction, DIFFUSE_BOUNCE for a diffuse bounce.
