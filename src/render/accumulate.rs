@@ -139,8 +139,7 @@ pub enum AccumulateLaunch {
     #[default]
     DeviceDefault,
     /// This many workgroups share the work: with ray queries their subgroups take runs of 8×8 tiles' pixels from a
-    /// queue; through the
-    /// pipeline, rows of 8 invocations take 8-pixel runs in turn.
+    /// queue; through the pipeline, rows of 8 invocations take 8-pixel runs in turn.
     Workgroups(u32),
     /// A GPU's launch on any device: one workgroup per tile (ray queries), one invocation per pixel (pipeline).
     OnePerTileOrPixel,
