@@ -35,5 +35,4 @@ void accumulate_sample(uvec2 pixel, vec4 paths_sum, uint paths) {
     uint i = pixel.y * pc.width + pixel.x;
     sums[i] += to_fixed_point(value);
 }
-
 #endif

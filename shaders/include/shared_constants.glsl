@@ -27,7 +27,8 @@ const uint ACCUMULATE_TILE_SIZE = 8u;
 // The pixels of an image row that one workgroup of the ray-tracing pipeline shades together on a CPU device
 // (accumulate.rgen's PIXEL_RUNS; lavapipe runs a pipeline as a compute shader of 8-lane workgroups).
 const uint ACCUMULATE_RUN_LENGTH = 8u;
-// Counters per sample slot (binding 8): shadow rays, secondary rays, the next run of pixels to shade (accumulate.comp).
+// Counters per sample slot (binding 8): shadow rays, secondary rays, the next run of pixels to shade
+// (accumulate.comp).
 const uint COUNTER_SHADOW_RAYS = 0u;
 const uint COUNTER_SECONDARY_RAYS = 1u;
 const uint COUNTER_NEXT_RUN = 2u;
