@@ -1,6 +1,6 @@
 #version 460
 // G-buffer pass: one camera sample (lens point, time, jitter) in pc.clip_from_world; instance transforms for
-// this sample's time in draws[gl_InstanceIndex].
+// this sample's time in draws[pc.draw], the draw pushed before each draw.
 #extension GL_EXT_scalar_block_layout : require
 #include "gbuffer_layout.glsl"
 
@@ -21,7 +21,7 @@ layout(location = 5) out vec3 out_dpdv;
 layout(location = 7) out vec2 out_uv1;
 
 void main() {
-    GBufferDraw d = draws[gl_InstanceIndex];
+    GBufferDraw d = draws[pc.draw];
     vec4 world = d.world_from_object * vec4(in_position, 1.0);
     gl_Position = pc.clip_from_world * world;
     out_world_position = world.xyz;

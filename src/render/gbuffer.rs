@@ -342,19 +342,13 @@ impl GBufferPass {
                         offsets[stream] = offset;
                     }
                 }
+                // The draw's record, for both stages: a push constant is uniform over the draw.
                 let draw = (first_draw + draw_index) as u32;
+                self.pipeline.push_constants_at(cmd, GBufferPush::DRAW_OFFSET, bytemuck::bytes_of(&draw));
                 unsafe {
-                    device.raw.cmd_push_constants(
-                        cmd,
-                        self.pipeline.layout,
-                        vk::ShaderStageFlags::ALL,
-                        GBufferPush::DRAW_OFFSET,
-                        bytemuck::bytes_of(&draw),
-                    );
                     device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &offsets);
                     device.raw.cmd_bind_index_buffer(cmd, primitive.indices.raw, 0, vk::IndexType::UINT32);
-                    // firstInstance selects the draw record (gl_InstanceIndex in gbuffer.vert).
-                    device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, (first_draw + draw_index) as u32);
+                    device.raw.cmd_draw_indexed(cmd, primitive.index_count, 1, 0, 0, 0);
                 }
             }
             unsafe { device.raw.cmd_end_rendering(cmd) };

@@ -451,6 +451,11 @@ impl Pipeline {
             }
         }
     }
+
+    /// Pushes `bytes` at `offset` of the bound pipeline's push constants (a member that changes between draws).
+    pub fn push_constants_at(&self, cmd: vk::CommandBuffer, offset: u32, bytes: &[u8]) {
+        unsafe { self.device.raw.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::ALL, offset, bytes) };
+    }
 }
 
 impl Drop for Pipeline {
