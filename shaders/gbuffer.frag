@@ -27,7 +27,7 @@ vec4 material_texture(int index, vec2 uv, vec4 rows[2], vec2 footprint_lod) {
 
 void main() {
     GBufferDraw d = draws[pc.draw];
-    GpuMaterial m = materials[d.material];
+    GpuMaterial m = materials[pc.material];
 
     // The face normal from screen-space derivatives, turned to the interpolated normal's side.
     vec3 face = cross(dFdx(in_world_position), dFdy(in_world_position));
@@ -73,7 +73,7 @@ void main() {
     t.specular_color_texel = p.specular_color_texel;
     t.specular = p.shading.specular;
     t.instance_plus_one = d.instance + 1u;
-    t.material = d.material;
+    t.material = pc.material;
     t.shading_normal = shading;
     t.geometric_normal = geometric;
     write_gbuffer(t);

@@ -143,6 +143,9 @@ layout(push_constant, std430) uniform GBufferPush {
     // the draw, so llvmpipe branches on its material's fields instead of running every branch under a mask, as it
     // did for a flat varying.
     uint draw;
+    // Its material's index (materials[material]), pushed too: indexed by a field of the draw record, the material's
+    // fields were gathered lane by lane (render/gbuffer_layout.rs, GBufferDrawPush).
+    uint material;
 } pc;
 #endif
 #endif

@@ -3,7 +3,9 @@
 //! Blinn bump-mapped normal. One pipeline draws every material: materials in a storage buffer, textures in a
 //! combined-image-sampler array indexed per material.
 use super::deformed::{DeformedStreams, DEFORMED_STREAMS};
-use super::gbuffer_layout::{attachment, GBufferDraw, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT};
+use super::gbuffer_layout::{
+    attachment, GBufferDraw, GBufferDrawPush, GBufferPush, GpuMaterial, ATTACHMENTS, DEPTH_FORMAT,
+};
 use super::gpu_scene::GpuScene;
 use super::textures::GpuTextures;
 use crate::math::lens::CameraSample;
@@ -315,7 +317,8 @@ impl GBufferPass {
                 clip_from_world: sample.clip_from_world(),
                 view_z_row: sample.view_from_world.row(2),
                 draw: 0,
-                pad: [0; 3],
+                material: 0,
+                pad: [0; 2],
             };
             self.pipeline.bind(cmd, Some(&inputs.set), bytemuck::bytes_of(&push));
             let first_draw = slot as usize * inputs.order.len();
@@ -342,8 +345,9 @@ impl GBufferPass {
                         offsets[stream] = offset;
                     }
                 }
-                // The draw's record, for both stages: a push constant is uniform over the draw.
-                let draw = (first_draw + draw_index) as u32;
+                // The draw's record and material, for both stages: a push constant is uniform over the draw.
+                let draw =
+                    GBufferDrawPush { draw: (first_draw + draw_index) as u32, material: inputs.draw_of[draw_index].1 };
                 self.pipeline.push_constants_at(cmd, GBufferPush::DRAW_OFFSET, bytemuck::bytes_of(&draw));
                 unsafe {
                     device.raw.cmd_bind_vertex_buffers(cmd, 0, &buffers, &offsets);

@@ -63,14 +63,28 @@ pub fn bytes_per_pixel() -> usize {
 pub struct GBufferPush {
     pub clip_from_world: Mat4,
     pub view_z_row: Vec4,
-    /// The draw record of the draw (set before each draw; `GBufferPush::DRAW_OFFSET`).
+    /// The draw record of the draw and its material's index (both set before each draw, as a
+    /// `GBufferDrawPush` at `GBufferPush::DRAW_OFFSET`).
     pub draw: u32,
-    pub pad: [u32; 3],
+    pub material: u32,
+    pub pad: [u32; 2],
 }
 
 impl GBufferPush {
-    /// Where `draw` is in the block: the one member pushed again before each draw.
+    /// Where `draw` and `material` are in the block: the members pushed again before each draw.
     pub const DRAW_OFFSET: u32 = std::mem::offset_of!(GBufferPush, draw) as u32;
+}
+
+/// What the G-buffer pass pushes before each draw, at `GBufferPush::DRAW_OFFSET`. The material's index is pushed
+/// rather than read from the draw record because llvmpipe loads a storage buffer's fields with one scalar load only
+/// where the index is a constant or a push constant: indexed by a field of another buffer, every field of the
+/// material was gathered lane by lane, and the Cornell box's pass without bumps took 17 ms at 512² where it takes
+/// 10 now (docs/performance.md, "The G-buffer pass: the material by a pushed index").
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GBufferDrawPush {
+    pub draw: u32,
+    pub material: u32,
 }
 
 #[repr(C)]
@@ -359,9 +373,13 @@ mod tests {
 
     #[test]
     fn layouts_match_glsl_std430() {
-        // 84 bytes of GLSL block, padded to 16 (within the 128 bytes every device offers).
+        // 88 bytes of GLSL block, padded to 16 (within the 128 bytes every device offers).
         assert_eq!(size_of::<GBufferPush>(), 96);
         assert_eq!(GBufferPush::DRAW_OFFSET, 80);
+        assert_eq!(offset_of!(GBufferPush, material), 84);
+        // Pushed as one GBufferDrawPush over both members.
+        assert_eq!(size_of::<GBufferDrawPush>(), 8);
+        assert_eq!(offset_of!(GBufferDrawPush, material), 84 - GBufferPush::DRAW_OFFSET as usize);
         assert_eq!(size_of::<GBufferDraw>(), 128);
         assert_eq!(offset_of!(GBufferDraw, normal_rows), 64);
         assert_eq!(offset_of!(GBufferDraw, material), 112);
