@@ -47,7 +47,9 @@ fn denoising_the_cornell_box_cuts_its_error_to_a_third_and_keeps_its_mean() {
         render_frame(gpu.device(), &scene, &on_gpu, &settings, &FrameOptions::default(), &mut |_, _| true).unwrap()
     };
     let noisy = render(8, 1, 1);
-    let reference = render(256, 4, 2);
+    // 1,024 paths a pixel: 64 of its own sub-pixel points with 16 paths from each. Against 256 points with 4 paths
+    // each the errors read the same to three figures (noisy 0.00522, denoised 0.00168) in 30 s instead of 37.
+    let reference = render(64, 16, 2);
     let (albedo, normal) = strata::denoise_guides(gpu.device(), &scene, &on_gpu, (SIZE, SIZE)).unwrap();
     let denoised = denoiser.denoise(&noisy.linear, &albedo, &normal).unwrap();
     // Outside the light and the pixels its edge covers in part (as scripts/reference/equal_error_mitsuba.py
