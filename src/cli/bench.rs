@@ -388,7 +388,7 @@ fn print_frame_figures(
         t.resolve_ms
     );
     println!(
-        "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 33.3%)",
+        "  {:.2} samples/s (GPU time), {:.2} s wall; TLAS + G-buffer = {:.1}% of the frame (target < 20%)",
         n / (total / 1e3),
         s.seconds,
         100.0 * (t.tlas_ms + t.gbuffer_ms) / total
