@@ -26,6 +26,12 @@ fn cornell_bumps_reach_their_materials() {
     let white = bump("white wall").unwrap();
     assert_eq!((white.kind, white.amplitude, white.frequency, white.octaves), (NoiseKind::Fbm, 0.004, 6.0, 4));
     assert_eq!(white.epsilon, 1.0 / 64.0, "ε defaults to 1/64");
+    // No `derivative` key: the exact gradient (central differences lose the finest octaves).
+    assert_eq!(
+        white.derivative,
+        strata::scene::material::BumpDerivative::Analytic,
+        "the derivative defaults to analytic"
+    );
     assert_eq!(bump("red wall").unwrap().kind, NoiseKind::Turbulence);
     assert_eq!(bump("green wall").unwrap().derivative, strata::scene::material::BumpDerivative::Analytic);
     assert!(bump("ceiling light").is_none());

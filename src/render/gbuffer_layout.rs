@@ -78,8 +78,8 @@ impl GBufferPush {
 /// What the G-buffer pass pushes before each draw, at `GBufferPush::DRAW_OFFSET`. The material's index is pushed
 /// rather than read from the draw record because llvmpipe loads a storage buffer's fields with one scalar load only
 /// where the index is a constant or a push constant: indexed by a field of another buffer, every field of the
-/// material was gathered lane by lane, and the Cornell box's pass without bumps took 17 ms at 512² where it takes
-/// 10 now (docs/performance.md, "The G-buffer pass: the material by a pushed index").
+/// material was gathered lane by lane, and the Cornell box's pass without bumps took 12 ms at 512² where it takes
+/// 5 now (docs/performance.md, "The G-buffer pass: the material by a pushed index").
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GBufferDrawPush {
