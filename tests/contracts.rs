@@ -235,7 +235,7 @@ fn the_gbuffer_pass_writes_each_attachment_where_the_rust_side_creates_it() {
 fn the_gbuffer_and_resolve_passes_agree_with_the_rust_layouts() {
     // The Rust struct pads to 16 bytes past the GLSL block's last member.
     let gbuffer_push = of!(GBufferPush; clip_from_world, view_z_row, draw, material);
-    let mut draw = of!(GBufferDraw; world_from_object, normal_rows, material, instance, coverage_key);
+    let mut draw = of!(GBufferDraw; world_from_object, normal_rows, instance, coverage_key);
     draw.push(("pad1", offset_of!(GBufferDraw, pad)));
     // The Rust struct pads to 16 bytes past the GLSL block's last member.
     let resolve = of!(ResolvePush; width, height, samples, exposure_scale, tone_map, transparent);

@@ -10,7 +10,7 @@ struct GBufferDraw {
     mat4 world_from_object;
     // Rows of the world-normal matrix (inverse transpose), padded to vec4.
     vec4 normal_rows[3];
-    uint material;
+    // The draw's material index is pushed (pc.material), not read from here.
     uint instance;
     uint coverage_key;  // this sample's key for BLEND's stochastic coverage (alpha_test_passes)
     uint pad1;

@@ -124,9 +124,9 @@ impl<'m> GBufferInputs<'m> {
         let records: Vec<GBufferDraw> = self
             .draw_of
             .iter()
-            .map(|&(instance, material)| {
+            .map(|&(instance, _)| {
                 let transform = transforms.get(instance).copied().unwrap_or(Mat4::ZERO);
-                GBufferDraw::new(transform, material, instance as u32, key)
+                GBufferDraw::new(transform, instance as u32, key)
             })
             .collect();
         let offset = u64::from(slot) * (self.order.len() * std::mem::size_of::<GBufferDraw>()) as u64;

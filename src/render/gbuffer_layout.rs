@@ -92,26 +92,25 @@ pub struct GBufferDrawPush {
 pub struct GBufferDraw {
     pub world_from_object: Mat4,
     pub normal_rows: [Vec4; 3],
-    pub material: u32,
     pub instance: u32,
     /// The sample's key for BLEND's stochastic coverage.
     pub coverage_key: u32,
-    pub pad: u32,
+    pub pad: [u32; 2],
 }
 
 impl GBufferDraw {
     /// `coverage_key`: the sample's key for BLEND's stochastic coverage (the fragment shader hashes it with the
     /// pixel and triangle).
-    pub fn new(world_from_object: Mat4, material: u32, instance: u32, coverage_key: u32) -> Self {
+    /// The draw's material is not here: it is pushed with the draw's index (`GBufferDrawPush`).
+    pub fn new(world_from_object: Mat4, instance: u32, coverage_key: u32) -> Self {
         let normal = Mat3::from_mat4(world_from_object).inverse().transpose();
         let normal = if normal.is_finite() { normal } else { Mat3::ZERO };
         Self {
             world_from_object,
             normal_rows: [0, 1, 2].map(|r| normal.row(r).extend(0.0)),
-            material,
             instance,
             coverage_key,
-            pad: 0,
+            pad: [0; 2],
         }
     }
 }
@@ -382,7 +381,7 @@ mod tests {
         assert_eq!(offset_of!(GBufferDrawPush, material), 84 - GBufferPush::DRAW_OFFSET as usize);
         assert_eq!(size_of::<GBufferDraw>(), 128);
         assert_eq!(offset_of!(GBufferDraw, normal_rows), 64);
-        assert_eq!(offset_of!(GBufferDraw, material), 112);
+        assert_eq!(offset_of!(GBufferDraw, instance), 112);
         assert_eq!(size_of::<GpuBump>(), 32);
         assert_eq!(offset_of!(GpuMaterial, emissive), 16);
         assert_eq!(offset_of!(GpuMaterial, metallic), 32);
