@@ -130,10 +130,9 @@ pub struct FrameFigure {
     pub replay_ms: f64,
 }
 
-/// Renders `scene` at `width` × `height` with `spp` samples, timing every pass, then casts as many bare rays as
-/// the accumulation pass cast per sample (camera rays through jittered pixels, closest hit, no shading) at the
-/// scene's TLAS, for the driver's ray-query ceiling; and replays the rays one more sample's pass cast, as it cast
-/// them, for the ceiling of that pass's own mix of rays.
+/// Renders `scene` at `width` × `height` with `spp` samples, timing every pass; with `probe`, also casts bare rays
+/// at the scene's TLAS (camera rays through the frame, closest hit, no shading: the driver's ray-query ceiling)
+/// and replays the rays one sample's pass cast, as it cast them (the ceiling of that pass's own mix of rays).
 pub fn time_frame(
     gpu: &Gpu,
     scene: &Scene,
@@ -155,6 +154,80 @@ pub fn time_frame(
     time_frame_with(gpu, scene, &settings, probe)
 }
 
+/// The probe's two casts, readied before the timed frame and cast between its batches.
+struct ProbeCasts {
+    probe: crate::render::ray_probe::RayProbe,
+    timer: TimestampPool,
+    tlas: crate::vk::accel::AccelerationStructure,
+    camera_rays: Vec<crate::render::ray_probe::ProbeRay>,
+    replay_tlas: crate::vk::accel::AccelerationStructure,
+    replay_rays: Vec<crate::render::ray_probe::ProbeRay>,
+    camera_ms: Vec<f64>,
+    replay_ms: Vec<f64>,
+    /// The BLASes both TLASes point at: kept as long as they are, dropped after them.
+    _ray_scene: crate::render::ray_scene::RayScene,
+}
+
+impl ProbeCasts {
+    /// Logs the rays a one-sample frame's accumulation pass casts and builds as many camera rays through
+    /// jittered points of the frame; TLASes at the shutter's opening (camera rays) and at that sample's time
+    /// (its own rays).
+    fn ready(
+        device: &std::sync::Arc<crate::vk::Device>,
+        scene: &Scene,
+        on_gpu: &SceneOnGpu,
+        settings: &crate::scene::settings::RenderSettings,
+    ) -> Result<Self> {
+        use crate::render::frame::{render_frame, FrameOptions};
+        use crate::render::ray_probe::{ProbeRay, RayProbe};
+        let ray_scene = crate::render::ray_scene::RayScene::build(device, scene, &on_gpu.geometry, 0)?;
+        let tlas_at = |name: &str, t: f32| {
+            let instances = ray_scene.tlas_instances(scene, &scene.instance_transforms_at(t));
+            crate::vk::accel::AccelerationStructure::build_tlas(device, name, &instances)
+        };
+        let one_sample = crate::scene::settings::RenderSettings { spp: 1, ..settings.clone() };
+        let log_options = FrameOptions { log_rays: true, ..Default::default() };
+        let replay_rays = render_frame(device, scene, on_gpu, &one_sample, &log_options, &mut |_, _| true)?.ray_log;
+        let (t, _, _) = crate::render::frame::camera_sample_at(scene, &one_sample, 0);
+        let camera = scene.camera_at(scene.shutter.0);
+        let sample = camera_sample(&camera, settings.width, settings.height, Vec2::splat(0.5), Vec2::ZERO);
+        let world_from_clip = sample.clip_from_world().inverse();
+        let camera_rays = (0..replay_rays.len().max(1))
+            .map(|i| {
+                let h = crate::math::sampling::pcg_hash(i as u32);
+                let u = crate::math::sampling::unit_float(h);
+                let v = crate::math::sampling::unit_float(crate::math::sampling::pcg_hash(h));
+                let ndc = glam::Vec2::new(u * 2.0 - 1.0, v * 2.0 - 1.0);
+                let near = world_from_clip.project_point3(ndc.extend(0.0));
+                let far = world_from_clip.project_point3(ndc.extend(0.999));
+                ProbeRay::closest(near, (far - near).normalize_or_zero(), 0.0, 1e30)
+            })
+            .collect();
+        let casts = Self {
+            probe: RayProbe::new(device)?,
+            timer: TimestampPool::new(device, "probe timestamps", 2)?,
+            tlas: tlas_at("probe TLAS", scene.shutter.0)?,
+            camera_rays,
+            replay_tlas: tlas_at("replay TLAS", t)?,
+            replay_rays,
+            camera_ms: Vec::new(),
+            replay_ms: Vec::new(),
+            _ray_scene: ray_scene,
+        };
+        // Each cast once untimed: the probe's pipeline compiles at its first dispatch.
+        casts.probe.cast_timed(&casts.tlas, &casts.camera_rays, None)?;
+        casts.probe.cast_timed(&casts.replay_tlas, &casts.replay_rays, None)?;
+        Ok(casts)
+    }
+
+    /// Both casts once, timed.
+    fn cast(&mut self) -> Result<()> {
+        self.camera_ms.push(self.probe.cast_timed(&self.tlas, &self.camera_rays, Some(&self.timer))?.1);
+        self.replay_ms.push(self.probe.cast_timed(&self.replay_tlas, &self.replay_rays, Some(&self.timer))?.1);
+        Ok(())
+    }
+}
+
 /// [`time_frame`] with any settings (the benchmark's own: jittered, still defaults otherwise).
 pub fn time_frame_with(
     gpu: &Gpu,
@@ -163,9 +236,8 @@ pub fn time_frame_with(
     probe: bool,
 ) -> Result<FrameFigure> {
     use crate::render::frame::{render_frame, FrameOptions};
-    use crate::render::ray_probe::{ProbeRay, RayProbe};
-    let (width, height, spp) = (settings.width, settings.height, settings.spp);
-    let settings = settings.clone();
+    use crate::render::ray_probe::ProbeRay;
+    let (width, height) = (settings.width, settings.height);
     let device = &gpu.device;
     let on_gpu = SceneOnGpu::upload(device, scene)?;
     let scene_bytes = device.allocator().generate_report().total_allocated_bytes;
@@ -181,56 +253,44 @@ pub fn time_frame_with(
         ..settings.clone()
     };
     render_frame(device, scene, &on_gpu, &warm_up, &options, &mut |_, _| true)?;
-    let frame = render_frame(device, scene, &on_gpu, &settings, &options, &mut |_, _| true)?;
-    let stats = frame.stats;
-    let (mut probe_rays, mut probe_ms) = (0, 0.0);
-    let (mut replay_rays, mut replay_shadow_rays, mut replay_ms) = (0, 0, 0.0);
-    if probe {
-        let ray_scene = crate::render::ray_scene::RayScene::build(device, scene, &on_gpu.geometry, 0)?;
-        let tlas_at = |name: &str, t: f32| {
-            let instances = ray_scene.tlas_instances(scene, &scene.instance_transforms_at(t));
-            crate::vk::accel::AccelerationStructure::build_tlas(device, name, &instances)
-        };
-        let tlas = tlas_at("probe TLAS", scene.shutter.0)?;
-        let per_sample = ((stats.shadow_rays + stats.secondary_rays) / u64::from(spp.max(1))).max(1);
-        let camera = scene.camera_at(scene.shutter.0);
-        let sample = camera_sample(&camera, width, height, Vec2::splat(0.5), Vec2::ZERO);
-        let world_from_clip = sample.clip_from_world().inverse();
-        let rays: Vec<ProbeRay> = (0..per_sample)
-            .map(|i| {
-                let h = crate::math::sampling::pcg_hash(i as u32);
-                let u = crate::math::sampling::unit_float(h);
-                let v = crate::math::sampling::unit_float(crate::math::sampling::pcg_hash(h));
-                let ndc = glam::Vec2::new(u * 2.0 - 1.0, v * 2.0 - 1.0);
-                let near = world_from_clip.project_point3(ndc.extend(0.0));
-                let far = world_from_clip.project_point3(ndc.extend(0.999));
-                ProbeRay::closest(near, (far - near).normalize_or_zero(), 0.0, 1e30)
-            })
-            .collect();
-        let timer = TimestampPool::new(device, "probe timestamps", 2)?;
-        let probe = RayProbe::new(device)?;
-        // One warm-up, then the median of five casts: one short dispatch is at the mercy of this shared
-        // machine's scheduler, while the frame's figure already sums many.
-        let median_ms = |tlas: &crate::vk::accel::AccelerationStructure, rays: &[ProbeRay]| -> Result<f64> {
-            probe.cast_timed(tlas, rays, Some(&timer))?;
-            let casts = (0..5).map(|_| Ok(probe.cast_timed(tlas, rays, Some(&timer))?.1)).collect::<Result<_>>()?;
-            Ok(median(casts))
-        };
-        probe_ms = median_ms(&tlas, &rays)?;
-        probe_rays = per_sample;
-
-        // The replay: a one-sample frame logs its accumulation pass's rays; they are cast again, in that order,
-        // at a TLAS of that sample's shutter time.
-        let one_sample = crate::scene::settings::RenderSettings { spp: 1, ..settings.clone() };
-        let log_options = FrameOptions { log_rays: true, ..Default::default() };
-        let logged = render_frame(device, scene, &on_gpu, &one_sample, &log_options, &mut |_, _| true)?.ray_log;
-        let (t, _, _) = crate::render::frame::camera_sample_at(scene, &one_sample, 0);
-        let tlas_at_t = tlas_at("replay TLAS", t)?;
-        replay_ms = median_ms(&tlas_at_t, &logged)?;
-        replay_rays = logged.len() as u64;
-        replay_shadow_rays = logged.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64;
+    let mut casts = if probe { Some(ProbeCasts::ready(device, scene, &on_gpu, settings)?) } else { None };
+    // The probe's casts run between the frame's batches (before the first and after each), so the ratios compare
+    // passes timed over the same minutes: this shared machine's speed swings within a run by more than the
+    // figures' margins, and a probe timed after the frame once read 4.9 M rays/s in one run and 8.9 in the next.
+    let mut cast_error = None;
+    let frame = render_frame(device, scene, &on_gpu, settings, &options, &mut |_, _| {
+        if let Some(casts) = casts.as_mut() {
+            if let Err(e) = casts.cast() {
+                cast_error.get_or_insert(e);
+                return false;
+            }
+        }
+        true
+    });
+    if let Some(e) = cast_error {
+        return Err(e);
     }
-    Ok(FrameFigure { stats, scene_bytes, probe_rays, probe_ms, replay_rays, replay_shadow_rays, replay_ms })
+    let stats = frame?.stats;
+    Ok(match casts {
+        Some(c) => FrameFigure {
+            stats,
+            scene_bytes,
+            probe_rays: c.camera_rays.len() as u64,
+            probe_ms: median(c.camera_ms),
+            replay_rays: c.replay_rays.len() as u64,
+            replay_shadow_rays: c.replay_rays.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64,
+            replay_ms: median(c.replay_ms),
+        },
+        None => FrameFigure {
+            stats,
+            scene_bytes,
+            probe_rays: 0,
+            probe_ms: 0.0,
+            replay_rays: 0,
+            replay_shadow_rays: 0,
+            replay_ms: 0.0,
+        },
+    })
 }
 
 /// Wall-clock milliseconds to create the accumulation pass's pipeline for `path` (its alpha-tested variant, with

@@ -496,7 +496,7 @@ fn the_frame_benchmark_runs_clean_and_prints_every_figure() {
             assert!(number_after(times, label) > 0.0, "{scene} {label} time in {times:?}");
         }
         let probe = find("accumulate ");
-        assert!(number_after(probe, "closest hit):") > 0.0, "{probe}");
+        assert!(number_after(probe, "batches):") > 0.0, "{probe}");
         let replay = find("accumulate vs the probe replaying");
         assert!(number_after(replay, "M rays/s,") > 0.0, "{replay}");
         assert!(number_after(find("reference mode"), "frame") > 0.0);

@@ -402,8 +402,8 @@ fn print_frame_figures(
     );
     if probe {
         println!(
-            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit): \
-             {:.1}% (target >= 60%)",
+            "  accumulate {:.2} M rays/s vs bare ray-query probe {:.2} M rays/s ({} camera rays, closest hit, \
+             cast between the frame's batches): {:.1}% (target >= 60%)",
             accumulate_rays_per_s / 1e6,
             probe_rays_per_s / 1e6,
             f.probe_rays,
