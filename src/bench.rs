@@ -272,15 +272,21 @@ pub fn time_frame_with(
     }
     let stats = frame?.stats;
     Ok(match casts {
-        Some(c) => FrameFigure {
-            stats,
-            scene_bytes,
-            probe_rays: c.camera_rays.len() as u64,
-            probe_ms: median(c.camera_ms),
-            replay_rays: c.replay_rays.len() as u64,
-            replay_shadow_rays: c.replay_rays.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64,
-            replay_ms: median(c.replay_ms),
-        },
+        Some(mut c) => {
+            // The frame reports its progress before its first batch, so there is a cast; if not, one now.
+            if c.camera_ms.is_empty() {
+                c.cast()?;
+            }
+            FrameFigure {
+                stats,
+                scene_bytes,
+                probe_rays: c.camera_rays.len() as u64,
+                probe_ms: median(c.camera_ms),
+                replay_rays: c.replay_rays.len() as u64,
+                replay_shadow_rays: c.replay_rays.iter().filter(|r| r.flags & ProbeRay::FIRST_HIT != 0).count() as u64,
+                replay_ms: median(c.replay_ms),
+            }
+        }
         None => FrameFigure {
             stats,
             scene_bytes,
