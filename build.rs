@@ -3,6 +3,12 @@
 //! table of all of them. A GLSL error fails the build as `path:line: message`. It also bakes the specular albedo
 //! table (`src/math/ggx.rs`) and the sheen albedo table (`src/math/sheen.rs`) into
 //! `$OUT_DIR/specular_albedo_table.rs`.
+//!
+//! The SPIR-V keeps its names (strata reads descriptor and struct names from them, `src/vk/spirv.rs`) but not the
+//! GLSL source and line numbers `-g` also embeds, unless `STRATA_SHADER_SOURCE=1` is set for the build (for a
+//! shader debugger that steps through GLSL): they were two fifths of the large shaders' bytes, and the validation
+//! layer parsing them cost every validated process about 0.18 s (docs/performance.md, "Shaders without their
+//! source").
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -22,6 +28,8 @@ fn main() {
 
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=shaders");
+    println!("cargo:rerun-if-env-changed=STRATA_SHADER_SOURCE");
+    let keep_source = std::env::var_os("STRATA_SHADER_SOURCE").is_some_and(|v| v == "1");
 
     let root = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR"));
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
@@ -79,7 +87,9 @@ fn main() {
                 }
                 let spv_name = format!("{file_name}.spv");
                 let spv_path = out_dir.join(&spv_name);
-                std::fs::write(&spv_path, artifact.as_binary_u8())
+                let words = artifact.as_binary();
+                let words = if keep_source { words.to_vec() } else { without_source_and_lines(words) };
+                std::fs::write(&spv_path, words.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>())
                     .unwrap_or_else(|e| fail(&format!("cannot write {}: {e}", spv_path.display())));
                 let ident = file_name.replace(['.', '-'], "_").to_uppercase();
                 let _ = writeln!(generated, "/// SPIR-V of `shaders/{file_name}`.");
@@ -107,6 +117,30 @@ fn main() {
         write_shared_constants(&shader_dir.join("include/shared_constants.glsl"), &out_dir.join("shared_constants.rs"));
     write_specular_albedo_table(&root, &constants, &out_dir.join("specular_albedo_table.rs"));
     write_check_files(&root, &out_dir.join("check_files.rs"));
+}
+
+/// `module` without the debug instructions that carry GLSL source and line numbers (SPIR-V spec 2.4, "Logical
+/// Layout of a Module", section 7a, and OpLine / OpNoLine anywhere): OpSourceContinued, OpSource,
+/// OpSourceExtension, OpString (which only OpSource and OpLine name here: glslang's `-g` emits no non-semantic
+/// debug info) and the line instructions. Names (OpName, OpMemberName) stay. None of them has a meaning for the
+/// code, so the driver compiles the same shader: pictures are the same bits. `tests/spirv.rs` runs `spirv-val` on
+/// the result.
+fn without_source_and_lines(module: &[u32]) -> Vec<u32> {
+    const SOURCE_AND_LINES: [u32; 6] = [2, 3, 4, 7, 8, 317];
+    const HEADER_WORDS: usize = 5;
+    let mut kept = module[..HEADER_WORDS.min(module.len())].to_vec();
+    let mut at = HEADER_WORDS;
+    while at < module.len() {
+        let (opcode, count) = (module[at] & 0xffff, (module[at] >> 16) as usize);
+        if count == 0 || at + count > module.len() {
+            fail(&format!("shaderc wrote malformed SPIR-V: instruction at word {at} has word count {count}"));
+        }
+        if !SOURCE_AND_LINES.contains(&opcode) {
+            kept.extend_from_slice(&module[at..at + count]);
+        }
+        at += count;
+    }
+    kept
 }
 
 /// The specular lobe's directional albedo table (`ggx::specular_albedo_table_values`) and the sheen lobe's
