@@ -148,7 +148,15 @@ fn compile_shader(path: &Path, root: &Path, shader_dir: &Path) -> Result<Compile
 /// code, so the driver compiles the same shader: pictures are the same bits. `tests/spirv.rs` runs `spirv-val` on
 /// the result.
 fn without_source_and_lines(module: &[u32]) -> Vec<u32> {
-    const SOURCE_AND_LINES: [u32; 6] = [2, 3, 4, 7, 8, 317];
+    // Opcodes (SPIR-V spec 3.52.2, "Debug Instructions").
+    const OP_SOURCE_CONTINUED: u32 = 2;
+    const OP_SOURCE: u32 = 3;
+    const OP_SOURCE_EXTENSION: u32 = 4;
+    const OP_STRING: u32 = 7;
+    const OP_LINE: u32 = 8;
+    const OP_NO_LINE: u32 = 317;
+    const SOURCE_AND_LINES: [u32; 6] =
+        [OP_SOURCE_CONTINUED, OP_SOURCE, OP_SOURCE_EXTENSION, OP_STRING, OP_LINE, OP_NO_LINE];
     const HEADER_WORDS: usize = 5;
     let mut kept = module[..HEADER_WORDS.min(module.len())].to_vec();
     let mut at = HEADER_WORDS;
