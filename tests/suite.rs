@@ -36,4 +36,5 @@ mod scale_out;
 mod scene_file;
 mod scenes;
 mod spirv;
+mod test_runner;
 mod validation_harness;
