@@ -7,9 +7,16 @@
 
 use std::sync::atomic::{AtomicPtr, Ordering};
 
-/// The signals that end the process from inside native code, with their names.
-const FATAL: [(libc::c_int, &str); 4] =
-    [(libc::SIGSEGV, "SIGSEGV"), (libc::SIGBUS, "SIGBUS"), (libc::SIGILL, "SIGILL"), (libc::SIGFPE, "SIGFPE")];
+/// The signals that end the process from inside native code, with their names. SIGABRT too: glibc aborts when it
+/// finds its heap corrupted ("malloc(): unaligned fastbin chunk detected", seen once in a test run), as does a
+/// failed assertion in a driver or layer.
+const FATAL: [(libc::c_int, &str); 5] = [
+    (libc::SIGSEGV, "SIGSEGV"),
+    (libc::SIGBUS, "SIGBUS"),
+    (libc::SIGILL, "SIGILL"),
+    (libc::SIGFPE, "SIGFPE"),
+    (libc::SIGABRT, "SIGABRT"),
+];
 
 /// What `strata` tells a user after a crash.
 const RENDER_ADVICE: &str = "Files are written only once a frame is finished, each whole or not at all, so none is \

@@ -96,7 +96,10 @@ fn a_crash_a_hang_and_a_flake_are_their_own_statuses_and_the_other_cases_still_r
     assert_eq!(status(&results, "test/pass"), "Pass");
     assert_eq!(status(&results, "golden/cornell"), "Pass");
     // The crash's output is kept, and the flake's first attempt.
-    assert!(out.join("cases/test-crash/log-1.txt").is_file());
+    // The abort is named by strata's own handler in the case's log, with its call stack, as a driver's crash is.
+    let crash_log = std::fs::read_to_string(out.join("cases/test-crash/log-1.txt")).unwrap();
+    assert!(crash_log.contains("strata: crashed with SIGABRT"), "{crash_log}");
+    assert!(crash_log.contains("the call stack, innermost first"), "{crash_log}");
     assert!(out.join("cases/test-flaky/attempt-1.json").is_file());
     let failures = std::fs::read_to_string(out.join("failures.csv")).unwrap();
     for case in ["test/crash,Crash", "test/flaky,Flake"] {
