@@ -54,8 +54,9 @@ ignored=0
 failed=()
 # A test whose process failed with a crash inside native code (the handler's "strata: crashed with SIG…", from
 # the test's own process or a `strata` it ran) runs once more: lavapipe and the validation layer crash now and then
-# while several processes compile pipelines cold (four crashes on record in dozens of full runs), never twice in a row
-# (README, "Tests"). The first run's log is kept and its crash is printed at the end either way; a second crash fails.
+# (five crashes on record in dozens of full runs, one inside the layer on heap memory something had overwritten),
+# never twice in a row (README, "Tests"). The first run's log is kept and its crash is printed at the end either way;
+# a second crash fails.
 crash_marker='strata: crashed with SIG'
 declare -A crashed_once=()
 rerun=-1
