@@ -162,22 +162,24 @@ if ((${#failed[@]} > 0)); then
     for i in "${failed[@]}"; do echo "    ${tests[$i]}"; done
 fi
 # Every crash last, where a CI log's tail shows it: the handler's message names the signal, the thread and the
-# faulting address, and its call stack gives library and offset for `addr2line`.
-crash_logs=()
-for i in "${!crashed_once[@]}"; do crash_logs+=("$logs/$i.crash.log"); done
-for i in "${failed[@]}"; do grep -q "$crash_marker" "$logs/$i.log" && crash_logs+=("$logs/$i.log"); done
-if ((${#crash_logs[@]} > 0)); then
+# faulting address, and its call stack gives library and offset for `addr2line`. `show_crash I RUN LOG` prints the
+# crash in LOG, run RUN of test I.
+show_crash() {
+    local i=$1 run=$2 log=$3
+    echo
+    echo "---- ${tests[$i]}, $run ----"
+    grep -A 24 "$crash_marker" "$log" | head -n 40
+}
+crash_report=$(
+    for i in "${!crashed_once[@]}"; do show_crash "$i" "first run" "$logs/$i.crash.log"; done
+    for i in "${failed[@]}"; do
+        if grep -q "$crash_marker" "$logs/$i.log"; then show_crash "$i" "the run that failed" "$logs/$i.log"; fi
+    done
+)
+if [[ -n $crash_report ]]; then
     echo
     echo "crashes inside native code (a test that crashed once ran once more; a second crash failed it):"
-    for log in "${crash_logs[@]}"; do
-        i=$(basename "$log")
-        i=${i%%.*}
-        echo
-        run="the run that failed"
-        [[ $log == *.crash.log ]] && run="first run"
-        echo "---- ${tests[$i]}, $run ----"
-        grep -A 24 "$crash_marker" "$log" | head -n 40
-    done
+    echo "$crash_report"
 fi
 echo
 result=ok

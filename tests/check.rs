@@ -95,8 +95,8 @@ fn a_crash_a_hang_and_a_flake_are_their_own_statuses_and_the_other_cases_still_r
     assert!(results["test/flaky"].2.contains("passed on the re-run"), "{:?}", results["test/flaky"]);
     assert_eq!(status(&results, "test/pass"), "Pass");
     assert_eq!(status(&results, "golden/cornell"), "Pass");
-    // The crash's output is kept, and the flake's first attempt.
-    // The abort is named by strata's own handler in the case's log, with its call stack, as a driver's crash is.
+    // The crash's output is kept, its abort named by strata's own handler with its call stack (as a driver's crash
+    // is), and the flake's first attempt.
     let crash_log = std::fs::read_to_string(out.join("cases/test-crash/log-1.txt")).unwrap();
     assert!(crash_log.contains("strata: crashed with SIGABRT"), "{crash_log}");
     assert!(crash_log.contains("the call stack, innermost first"), "{crash_log}");
