@@ -14,6 +14,7 @@ pub mod readback;
 pub mod sampler;
 pub mod shader_binding_table;
 pub mod spirv;
+pub mod spirv_specialize;
 pub mod timer;
 pub mod upload;
 pub mod validation;

@@ -26,8 +26,23 @@ pub struct ShaderModule {
 
 impl ShaderModule {
     pub fn new(device: &Arc<Device>, name: &str, spirv: &[u8]) -> Result<Self> {
+        Self::from_words(device, name, &spirv_words(name, spirv)?)
+    }
+
+    /// The module with its specialization constants `constant_id = i` frozen at `constants[i]` and the blocks
+    /// they switch off removed (`spirv_specialize`), and whether that was done: if not (a module without
+    /// specialization constants, or with a kind this does not freeze), the module is whole and the pipeline must
+    /// pass the constants to the driver.
+    pub fn specialized(device: &Arc<Device>, name: &str, spirv: &[u8], constants: &[u32]) -> Result<(Self, bool)> {
         let words = spirv_words(name, spirv)?;
-        let info = vk::ShaderModuleCreateInfo::default().code(&words);
+        match super::spirv_specialize::specialize(&words, constants) {
+            Some(specialized) => Ok((Self::from_words(device, name, &specialized)?, true)),
+            None => Ok((Self::from_words(device, name, &words)?, false)),
+        }
+    }
+
+    fn from_words(device: &Arc<Device>, name: &str, words: &[u32]) -> Result<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(words);
         let raw = unsafe { device.raw.create_shader_module(&info, None) }
             .with_context(|| format!("vkCreateShaderModule {name}"))?;
         device.set_name(raw, name);
@@ -175,9 +190,10 @@ impl Pipeline {
         Self::compute_specialized(device, name, shader, bindings, push_constant_size, &[])
     }
 
-    /// A compute pipeline whose 32-bit specialization constants `constant_id = i` take `constants[i]`: the
-    /// driver compiles the branches they switch off out of the pipeline. Built once per device for each distinct
-    /// request and kept (`KeptPipelines`); later requests share it.
+    /// A compute pipeline whose 32-bit specialization constants `constant_id = i` take `constants[i]`, frozen
+    /// into the module with the branches they switch off removed before the driver reads it
+    /// (`ShaderModule::specialized`). Built once per device for each distinct request and kept
+    /// (`KeptPipelines`); later requests share it.
     pub fn compute_specialized(
         device: &Arc<Device>,
         name: &str,
@@ -196,12 +212,12 @@ impl Pipeline {
             fixed_function: Vec::new(),
         };
         Self::kept(device, key, bindings, |device, layout, specialization| {
-            let module = ShaderModule::new(device, shader.0, shader.1)?;
+            let (module, frozen) = ShaderModule::specialized(device, shader.0, shader.1, constants)?;
             let mut stage = vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(module.raw)
                 .name(ENTRY);
-            if let Some(specialization) = specialization {
+            if let Some(specialization) = specialization.filter(|_| !frozen) {
                 stage = stage.specialization_info(specialization);
             }
             let info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)];
@@ -215,8 +231,9 @@ impl Pipeline {
     /// A ray-tracing pipeline (`VK_KHR_ray_tracing_pipeline`) of three shader groups, in this order: the raygen
     /// shader, the miss shader, and one triangle hit group of a closest-hit shader and, where given, an any-hit
     /// shader. Rays recurse no deeper than the raygen shader's own `traceRayEXT` (maxPipelineRayRecursionDepth
-    /// 1): bounces are loops in the raygen shader. The specialization constants go to every stage. Kept by the
-    /// device like compute pipelines; `ShaderBindingTable` lays out its group handles.
+    /// 1): bounces are loops in the raygen shader. The specialization constants go to every stage, frozen into
+    /// it as for compute. Kept by the device like compute pipelines; `ShaderBindingTable` lays out its group
+    /// handles.
     pub fn ray_tracing(device: &Arc<Device>, desc: &RayTracingDesc<'_>) -> Result<Self> {
         let rt = device.require_ray_tracing_pipelines(desc.name)?;
         let mut stages = vec![desc.raygen, desc.miss, desc.closest_hit];
@@ -237,13 +254,16 @@ impl Pipeline {
                 vk::ShaderStageFlags::CLOSEST_HIT_KHR,
                 vk::ShaderStageFlags::ANY_HIT_KHR,
             ];
-            let modules = stages.iter().map(|s| ShaderModule::new(device, s.0, s.1)).collect::<Result<Vec<_>>>()?;
+            let modules = stages
+                .iter()
+                .map(|s| ShaderModule::specialized(device, s.0, s.1, desc.constants))
+                .collect::<Result<Vec<_>>>()?;
             let stage_infos: Vec<vk::PipelineShaderStageCreateInfo> = modules
                 .iter()
                 .zip(kinds)
-                .map(|(module, kind)| {
+                .map(|((module, frozen), kind)| {
                     let info = vk::PipelineShaderStageCreateInfo::default().stage(kind).module(module.raw).name(ENTRY);
-                    match specialization {
+                    match specialization.filter(|_| !frozen) {
                         Some(s) => info.specialization_info(s),
                         None => info,
                     }
