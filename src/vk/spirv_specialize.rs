@@ -78,7 +78,7 @@ fn parse(words: &[u32]) -> Option<Module> {
     let mut i = 5;
     while i < words.len() {
         let count = (words[i] >> 16) as usize;
-        if count == 0 || i + count > words.len() {
+        if count == 0 || i + count > words.len() || count < least_words(words[i] & 0xffff) {
             return None;
         }
         instructions.push(words[i..i + count].to_vec());
@@ -88,34 +88,40 @@ fn parse(words: &[u32]) -> Option<Module> {
     Some(Module { header, instructions, values: HashMap::new() })
 }
 
+/// The fewest words a valid instruction of the opcodes read here has (SPIR-V spec 3.32), so that reading its
+/// operands cannot run past it; 1 for the rest.
+fn least_words(op: u32) -> usize {
+    match op {
+        OP_NAME | OP_TYPE_BOOL | OP_LABEL | OP_BRANCH => 2,
+        OP_CONSTANT_TRUE | OP_CONSTANT_FALSE | OP_SPEC_CONSTANT_TRUE | OP_SPEC_CONSTANT_FALSE => 3,
+        OP_DECORATE | OP_DECORATE_ID | OP_DECORATE_STRING | OP_SELECTION_MERGE | OP_SWITCH | OP_PHI => 3,
+        OP_CONSTANT | OP_SPEC_CONSTANT | OP_SPEC_CONSTANT_OP | OP_LOOP_MERGE | OP_BRANCH_CONDITIONAL => 4,
+        _ => 1,
+    }
+}
+
 /// `OpSpecConstantOp`'s operation on 32-bit integers and booleans (as 0 or 1); None for any other.
 fn evaluate(operation: u32, a: &[u32]) -> Option<u32> {
     let arg = |k: usize| a.get(k).copied();
     let (x, y) = (arg(0)?, arg(1));
     Some(match operation {
-        128 => x.wrapping_add(y?),           // OpIAdd
-        130 => x.wrapping_sub(y?),           // OpISub
-        132 => x.wrapping_mul(y?),           // OpIMul
-        164 | 170 => u32::from(x == y?),     // OpLogicalEqual, OpIEqual
-        165 | 171 => u32::from(x != y?),     // OpLogicalNotEqual, OpINotEqual
-        166 => u32::from(x != 0 || y? != 0), // OpLogicalOr
-        167 => u32::from(x != 0 && y? != 0), // OpLogicalAnd
-        168 => u32::from(x == 0),            // OpLogicalNot
-        169 => {
-            if x != 0 {
-                y?
-            } else {
-                arg(2)?
-            }
-        } // OpSelect
-        172 => u32::from(x > y?),            // OpUGreaterThan
-        174 => u32::from(x >= y?),           // OpUGreaterThanEqual
-        176 => u32::from(x < y?),            // OpULessThan
-        178 => u32::from(x <= y?),           // OpULessThanEqual
-        197 => x | y?,                       // OpBitwiseOr
-        198 => x ^ y?,                       // OpBitwiseXor
-        199 => x & y?,                       // OpBitwiseAnd
-        200 => !x,                           // OpNot
+        128 => x.wrapping_add(y?),                 // OpIAdd
+        130 => x.wrapping_sub(y?),                 // OpISub
+        132 => x.wrapping_mul(y?),                 // OpIMul
+        164 | 170 => u32::from(x == y?),           // OpLogicalEqual, OpIEqual
+        165 | 171 => u32::from(x != y?),           // OpLogicalNotEqual, OpINotEqual
+        166 => u32::from(x != 0 || y? != 0),       // OpLogicalOr
+        167 => u32::from(x != 0 && y? != 0),       // OpLogicalAnd
+        168 => u32::from(x == 0),                  // OpLogicalNot
+        169 => [y?, arg(2)?][usize::from(x == 0)], // OpSelect: the condition, then the two values
+        172 => u32::from(x > y?),                  // OpUGreaterThan
+        174 => u32::from(x >= y?),                 // OpUGreaterThanEqual
+        176 => u32::from(x < y?),                  // OpULessThan
+        178 => u32::from(x <= y?),                 // OpULessThanEqual
+        197 => x | y?,                             // OpBitwiseOr
+        198 => x ^ y?,                             // OpBitwiseXor
+        199 => x & y?,                             // OpBitwiseAnd
+        200 => !x,                                 // OpNot
         _ => return None,
     })
 }
@@ -127,8 +133,9 @@ struct Block {
 }
 
 impl Block {
+    /// The block's last instruction: its terminator in a valid module (its label if the module ends early).
     fn terminator(&self) -> &Instruction {
-        self.instructions.last().expect("a block ends in its terminator")
+        &self.instructions[self.instructions.len() - 1]
     }
 
     /// The merge instruction before the terminator, if the block heads a construct.
@@ -189,7 +196,6 @@ impl Module {
                 }
                 OP_SPEC_CONSTANT_OP => {
                     let operands = i[4..].iter().map(|id| self.values.get(id).copied()).collect::<Option<Vec<_>>>()?;
-                    // OpSelect's first operand is its condition, the rest values; every other takes values.
                     let value = evaluate(i[3], &operands)?;
                     self.values.insert(i[2], value);
                     *i = if bools.contains(&i[1]) {
