@@ -219,7 +219,7 @@ impl Module {
     fn prune_functions(&mut self) -> Option<HashSet<u32>> {
         let mut removed = HashSet::new();
         let mut out = Vec::with_capacity(self.instructions.len());
-        let mut rest = std::mem::take(&mut self.instructions).into_iter().peekable();
+        let mut rest = std::mem::take(&mut self.instructions).into_iter();
         while let Some(i) = rest.next() {
             if opcode(&i) != OP_FUNCTION {
                 out.push(i);
