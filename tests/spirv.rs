@@ -11,19 +11,8 @@ fn every_shader_passes_spirv_val() {
         assert_eq!(&bytes[..4], &0x0723_0203u32.to_le_bytes(), "{name}: no SPIR-V magic number");
         let path = dir.join(format!("{name}.spv"));
         std::fs::write(&path, bytes).unwrap();
-        let output = Command::new("spirv-val")
-            .args(["--target-env", "vulkan1.3", "--scalar-block-layout"])
-            .arg(&path)
-            .output()
-            .unwrap_or_else(|e| {
-                panic!("cannot run spirv-val ({e}); run `sudo scripts/setup.sh` (it installs spirv-tools)")
-            });
-        if !output.status.success() {
-            failures.push(format!(
-                "{name}: {}{}",
-                String::from_utf8_lossy(&output.stdout),
-                String::from_utf8_lossy(&output.stderr)
-            ));
+        if let Err(e) = spirv_val(&path) {
+            failures.push(format!("{name}: {e}"));
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
