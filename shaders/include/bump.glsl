@@ -19,16 +19,21 @@ struct Bump {
     float epsilon;
 };
 
-// The field at uv before the amplitude: value in w, gradient with respect to (u, v) in xy.
+// Whether the field is an octave sum of noise (plain noise is one octave); otherwise it is the sine.
+bool bump_is_noise(Bump b) {
+    return b.kind == BUMP_NOISE || b.kind == BUMP_FBM || b.kind == BUMP_TURBULENCE;
+}
+
+// The field at uv before the amplitude: value in w, gradient with respect to (u, v) in xy. Plain noise, fBm and
+// turbulence go through one octave sum (plain noise: one octave from -0.0, the noise's own bits), so the noise is
+// inlined once.
 vec4 bump_field(Bump b, vec2 uv) {
     vec3 p = vec3(uv * b.frequency, 0.0);
     vec4 n;
-    if (b.kind == BUMP_NOISE) {
-        n = noise_with_gradient(p);
-    } else if (b.kind == BUMP_FBM) {
-        n = fbm_with_gradient(p, b.octaves, b.lacunarity, b.gain);
-    } else if (b.kind == BUMP_TURBULENCE) {
-        n = turbulence_with_gradient(p, b.octaves, b.lacunarity, b.gain);
+    if (bump_is_noise(b)) {
+        bool plain = b.kind == BUMP_NOISE;
+        n = octave_sum_with_gradient(p, plain ? 1u : b.octaves, b.lacunarity, b.gain, b.kind == BUMP_TURBULENCE,
+                                     vec4(plain ? -0.0 : 0.0));
     } else {
         const float TAU = 6.28318530717958647692;
         float phase = TAU * p.x;
@@ -40,23 +45,36 @@ vec4 bump_field(Bump b, vec2 uv) {
 // The field's value alone at uv before the amplitude: bump_field(b, uv).w, without the gradient's work.
 float bump_field_value(Bump b, vec2 uv) {
     vec3 p = vec3(uv * b.frequency, 0.0);
-    if (b.kind == BUMP_NOISE) return noise_value(p);
-    if (b.kind == BUMP_FBM) return fbm_value(p, b.octaves, b.lacunarity, b.gain);
-    if (b.kind == BUMP_TURBULENCE) return turbulence_value(p, b.octaves, b.lacunarity, b.gain);
+    if (bump_is_noise(b)) {
+        bool plain = b.kind == BUMP_NOISE;
+        return octave_sum_value(p, plain ? 1u : b.octaves, b.lacunarity, b.gain, b.kind == BUMP_TURBULENCE,
+                                plain ? -0.0 : 0.0);
+    }
     const float TAU = 6.28318530717958647692;
     return sin(TAU * p.x);
 }
 
-float bump_height(Bump b, vec2 uv) {
-    return b.amplitude * bump_field_value(b, uv);
+// The field's values before the amplitude at uv (k = 0) and around it for central differences with step epsilon:
+// uv + (e, 0), uv - (e, 0), uv + (0, e), uv - (0, e) (k = 1..4, in `around`), from k = `first`. One loop rather
+// than five calls, so the field's code is inlined once (docs/performance.md, "One noise call site").
+void bump_field_values(Bump b, vec2 uv, uint first, out float at_uv, out vec4 around) {
+    float e = b.epsilon;
+    at_uv = 0.0;
+    around = vec4(0.0);
+    for (uint k = first; k < 5u; k++) {
+        vec2 d = k < 3u ? vec2(e, 0.0) : vec2(0.0, e);
+        float f = bump_field_value(b, k == 0u ? uv : ((k & 1u) == 1u ? uv + d : uv - d));
+        at_uv = k == 0u ? f : at_uv;
+        around = vec4(k == 1u ? f : around.x, k == 2u ? f : around.y, k == 3u ? f : around.z,
+                      k == 4u ? f : around.w);
+    }
 }
 
-// (B_u, B_v) by central differences with step epsilon: four evaluations of the field's value.
-vec2 bump_central_differences(Bump b, vec2 uv) {
-    float e = b.epsilon;
-    float du = bump_height(b, uv + vec2(e, 0.0)) - bump_height(b, uv - vec2(e, 0.0));
-    float dv = bump_height(b, uv + vec2(0.0, e)) - bump_height(b, uv - vec2(0.0, e));
-    return vec2(du, dv) / (2.0 * e);
+// (B_u, B_v) by central differences with step epsilon from the field's values around the point.
+vec2 bump_central_differences(Bump b, vec4 around) {
+    float du = b.amplitude * around.x - b.amplitude * around.y;
+    float dv = b.amplitude * around.z - b.amplitude * around.w;
+    return vec2(du, dv) / (2.0 * b.epsilon);
 }
 
 // (B, B_u, B_v): the height and its gradient, by central differences (five field evaluations) or analytically
@@ -66,13 +84,19 @@ vec3 bump_height_and_gradient(Bump b, vec2 uv) {
         vec4 f = bump_field(b, uv);
         return b.amplitude * vec3(f.w, f.xy);
     }
-    return vec3(bump_height(b, uv), bump_central_differences(b, uv));
+    float at_uv;
+    vec4 around;
+    bump_field_values(b, uv, 0u, at_uv, around);
+    return vec3(b.amplitude * at_uv, bump_central_differences(b, around));
 }
 
 // (B_u, B_v) alone, for shading that never reads the height (ray hits): central differences skip B itself.
 vec2 bump_gradient(Bump b, vec2 uv) {
     if (b.derivative == BUMP_ANALYTIC) return b.amplitude * bump_field(b, uv).xy;
-    return bump_central_differences(b, uv);
+    float at_uv;
+    vec4 around;
+    bump_field_values(b, uv, 1u, at_uv, around);
+    return bump_central_differences(b, around);
 }
 
 // Blinn's perturbed normal; degenerate derivatives or a zero normal give the unperturbed normal, never NaN.

@@ -104,10 +104,11 @@ float noise_value(vec3 p) {
     return noise_blend_value(noise_blend(n0, n1, n2, n3, n4, n5, n6, n7), u, v, w);
 }
 
-// The sum of gain^i * noise(lacunarity^i * p), each octave's noise taken as |noise| when `absolute`: the values of
-// fbm_with_gradient and turbulence_with_gradient by the same operations.
-float octave_sum_value(vec3 p, uint octaves, float lacunarity, float gain, bool absolute) {
-    float sum = 0.0;
+// The sum of gain^i * noise(lacunarity^i * p), each octave's noise taken as |noise| when `absolute`, added to
+// `start`: the values of fbm_with_gradient and turbulence_with_gradient by the same operations, and from a start of
+// -0.0 with one octave noise_value itself, bit for bit (-0.0 + x is x for every x; 0.0 + -0.0 is +0.0).
+float octave_sum_value(vec3 p, uint octaves, float lacunarity, float gain, bool absolute, float start) {
+    float sum = start;
     float amplitude = 1.0, frequency = 1.0;
     for (uint i = 0u; i < octaves; ++i) {
         float n = noise_value(p * frequency);
@@ -119,38 +120,40 @@ float octave_sum_value(vec3 p, uint octaves, float lacunarity, float gain, bool 
 }
 
 float fbm_value(vec3 p, uint octaves, float lacunarity, float gain) {
-    return octave_sum_value(p, octaves, lacunarity, gain, false);
+    return octave_sum_value(p, octaves, lacunarity, gain, false, 0.0);
 }
 
 float turbulence_value(vec3 p, uint octaves, float lacunarity, float gain) {
-    return octave_sum_value(p, octaves, lacunarity, gain, true);
+    return octave_sum_value(p, octaves, lacunarity, gain, true, 0.0);
+}
+
+// The octave sum with its gradient (value in w, gradient in xyz): each octave's noise and gradient turned by the
+// noise's sign when `absolute` (|noise| has gradient sign(noise) * gradient), added to `start`. From a start of
+// -0.0 with one octave it is noise_with_gradient itself, bit for bit (as octave_sum_value). Callers that choose
+// among plain noise, fBm and turbulence at run time call this once: a driver inlines every call site, and three
+// copies of the noise made most of the shading code (docs/performance.md, "One noise call site").
+vec4 octave_sum_with_gradient(vec3 p, uint octaves, float lacunarity, float gain, bool absolute, vec4 start) {
+    vec4 sum = start;
+    float amplitude = 1.0, frequency = 1.0;
+    for (uint i = 0u; i < octaves; ++i) {
+        vec4 n = noise_with_gradient(p * frequency);
+        float s = absolute && n.w < 0.0 ? -1.0 : 1.0;
+        sum += vec4(s * n.x * frequency, s * n.y * frequency, s * n.z * frequency, absolute ? abs(n.w) : n.w)
+            * amplitude;
+        amplitude *= gain;
+        frequency *= lacunarity;
+    }
+    return sum;
 }
 
 // fBm: sum of gain^i * noise(lacunarity^i * p), value in w, gradient in xyz.
 vec4 fbm_with_gradient(vec3 p, uint octaves, float lacunarity, float gain) {
-    vec4 sum = vec4(0.0);
-    float amplitude = 1.0, frequency = 1.0;
-    for (uint i = 0u; i < octaves; ++i) {
-        vec4 n = noise_with_gradient(p * frequency);
-        sum += vec4(n.x * frequency, n.y * frequency, n.z * frequency, n.w) * amplitude;
-        amplitude *= gain;
-        frequency *= lacunarity;
-    }
-    return sum;
+    return octave_sum_with_gradient(p, octaves, lacunarity, gain, false, vec4(0.0));
 }
 
 // Turbulence: sum of gain^i * |noise(lacunarity^i * p)| (Perlin 1985), value in w, gradient in xyz.
 vec4 turbulence_with_gradient(vec3 p, uint octaves, float lacunarity, float gain) {
-    vec4 sum = vec4(0.0);
-    float amplitude = 1.0, frequency = 1.0;
-    for (uint i = 0u; i < octaves; ++i) {
-        vec4 n = noise_with_gradient(p * frequency);
-        float s = n.w < 0.0 ? -1.0 : 1.0;
-        sum += vec4(s * n.x * frequency, s * n.y * frequency, s * n.z * frequency, abs(n.w)) * amplitude;
-        amplitude *= gain;
-        frequency *= lacunarity;
-    }
-    return sum;
+    return octave_sum_with_gradient(p, octaves, lacunarity, gain, true, vec4(0.0));
 }
 
 #endif
