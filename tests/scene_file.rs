@@ -41,6 +41,37 @@ fn cornell_bumps_reach_their_materials() {
 }
 
 #[test]
+fn every_bump_kind_the_scene_format_lists_is_read_and_others_are_named_errors() {
+    // docs/scene-format.md's `[[bump]]` table lists four kinds; each must load, into the kind the shader draws.
+    let dir = crate::common::cli::temp_dir("bump-kinds");
+    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.gltf");
+    let scene_with = |kind: &str| {
+        let path = dir.join(format!("{kind}.toml"));
+        let text = format!("gltf = {:?}\n\n[[bump]]\nmaterial = \"white wall\"\nkind = \"{kind}\"\n", gltf);
+        std::fs::write(&path, text).unwrap();
+        path
+    };
+    for (name, kind) in [
+        ("noise", NoiseKind::Noise),
+        ("fbm", NoiseKind::Fbm),
+        ("turbulence", NoiseKind::Turbulence),
+        ("sine", NoiseKind::Sine),
+    ] {
+        let path = scene_with(name);
+        let s = strata::load(&path, &Default::default()).unwrap_or_else(|e| panic!("{name}: {e:#}")).scene;
+        let white = s.materials.iter().find(|m| m.name == "white wall").unwrap().bump.unwrap();
+        assert_eq!(white.kind, kind, "{name}");
+    }
+    let path = scene_with("ripple");
+    let err = format!("{:#}", strata::load(&path, &Default::default()).expect_err("an unknown kind must fail"));
+    assert!(
+        err.contains("ripple.toml") && err.contains("unknown noise kind \"ripple\"") && err.contains("sine"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn dof_lens_and_f_number_follow_the_thin_lens_model() {
     let s = load("dof.toml").scene;
     let lens = s.camera.as_ref().unwrap().lens;

@@ -566,10 +566,10 @@ fn apply_bumps(source: &Source<'_>, bumps: &[BumpSection], scene: &mut Scene) ->
                 "noise" => NoiseKind::Noise,
                 "fbm" => NoiseKind::Fbm,
                 "turbulence" => NoiseKind::Turbulence,
+                "sine" => NoiseKind::Sine,
                 other => {
-                    return Err(
-                        source.error(k.span(), format!("unknown noise kind \"{other}\" (noise, fbm, turbulence)"))
-                    )
+                    return Err(source
+                        .error(k.span(), format!("unknown noise kind \"{other}\" (noise, fbm, turbulence, sine)")))
                 }
             };
         }
