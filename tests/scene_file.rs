@@ -44,7 +44,7 @@ fn cornell_bumps_reach_their_materials() {
 fn every_bump_kind_the_scene_format_lists_is_read_and_others_are_named_errors() {
     // docs/scene-format.md's `[[bump]]` table lists four kinds; each must load, into the kind the shader draws.
     let dir = crate::common::cli::temp_dir("bump-kinds");
-    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.gltf");
+    let gltf = crate::common::cli::repo_file("scenes/cornell.gltf");
     let scene_with = |kind: &str| {
         let path = dir.join(format!("{kind}.toml"));
         let text = format!("gltf = {:?}\n\n[[bump]]\nmaterial = \"white wall\"\nkind = \"{kind}\"\n", gltf);
@@ -133,7 +133,7 @@ fn a_point_light_takes_a_range() {
     let dir = std::env::temp_dir().join(format!("strata-range-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("ranged.toml");
-    let gltf = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.gltf");
+    let gltf = crate::common::cli::repo_file("scenes/cornell.gltf");
     let light = "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 3\nrange = 4.5\n";
     std::fs::write(&path, format!("gltf = {:?}\n{light}", gltf.display().to_string())).unwrap();
     let scene = strata::load(&path, &Default::default()).unwrap_or_else(|e| panic!("{e:#}")).scene;
