@@ -130,8 +130,7 @@ fn soft_shadow_lights_convert_power_to_radiance() {
 
 #[test]
 fn a_point_light_takes_a_range() {
-    let dir = std::env::temp_dir().join(format!("strata-range-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::cli::temp_dir("range");
     let path = dir.join("ranged.toml");
     let gltf = crate::common::cli::repo_file("scenes/cornell.gltf");
     let light = "[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = 3\nrange = 4.5\n";
@@ -161,8 +160,7 @@ fn settings_layer_defaults_then_file_then_command_line() {
 #[test]
 fn the_render_table_chooses_traced_primary_rays_and_interreflection() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("strata-primary-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::cli::temp_dir("primary");
     let path = dir.join("traced.toml");
     let gltf = root.join("scenes/cornell.gltf");
     let render = "[render]\nprimary = \"rays\"\nindirect = true\nbounces = 6\nshading_samples = 4\n";
@@ -183,8 +181,7 @@ fn every_example_in_the_format_document_loads() {
     let doc = std::fs::read_to_string(root.join("docs/scene-format.md")).unwrap();
     let blocks: Vec<&str> = doc.split("```toml\n").skip(1).map(|b| b.split("```").next().unwrap()).collect();
     assert!(blocks.len() >= 8, "found {} toml examples", blocks.len());
-    let dir = std::env::temp_dir().join(format!("strata-doc-examples-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::cli::temp_dir("doc-examples");
     for (i, block) in blocks.iter().enumerate() {
         // Examples name materials of the cornell scene or nodes of the showcase; point them at the right glTF.
         let scene = if block.contains("white wall") { "cornell" } else { "showcase" };
@@ -202,8 +199,7 @@ fn every_example_in_the_format_document_loads() {
 fn the_environment_table_and_background_words_land_where_the_renderer_reads_them() {
     use strata::scene::settings::Backdrop;
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = std::env::temp_dir().join(format!("strata-environment-table-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::cli::temp_dir("environment-table");
     let gltf = root.join("scenes/showcase.gltf");
     let write = |name: &str, body: &str| {
         let path = dir.join(name);
