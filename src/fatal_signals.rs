@@ -22,6 +22,21 @@ const FATAL: [(libc::c_int, &str); 5] = [
 const RENDER_ADVICE: &str = "Files are written only once a frame is finished, each whole or not at all, so none is \
      left half-written. `strata info` checks the setup; please report the command that crashed.";
 
+/// The variable through which lavapipe (llvmpipe) takes its SIMD width in bits.
+const VECTOR_WIDTH_VARIABLE: &str = "LP_NATIVE_VECTOR_WIDTH";
+
+/// What a crash message adds where the user set lavapipe's vector width: Mesa 25.0's shader cache does not tell
+/// the widths apart, and lavapipe crashes running code it cached at another width (docs/performance.md,
+/// "lavapipe's vector width and Mesa's cache"), a crash nothing else in the message would explain.
+fn vector_width_advice(width: Option<std::ffi::OsString>) -> Option<String> {
+    let width = width?;
+    Some(format!(
+        "{VECTOR_WIDTH_VARIABLE} is set (to {}): Mesa's shader cache does not tell lavapipe's vector widths apart, \
+         and lavapipe crashes on code it cached at another width; give each width its own MESA_SHADER_CACHE_DIR.",
+        width.to_string_lossy()
+    ))
+}
+
 /// The message's last sentence, and what was running (`set_running`). Each points at a leaked `&'static str`,
 /// so the handler reads a whole string with one atomic load and no lock.
 static ADVICE: AtomicPtr<&'static str> = AtomicPtr::new(std::ptr::null_mut());
@@ -46,6 +61,10 @@ pub fn report_fatal_signals() {
 
 /// The same, ending the message with `advice` instead of what `strata render` tells a user (test harnesses).
 pub fn report_fatal_signals_with(advice: &'static str) {
+    let advice: &'static str = match vector_width_advice(std::env::var_os(VECTOR_WIDTH_VARIABLE)) {
+        Some(hint) => Box::leak(format!("{advice} {hint}").into_boxed_str()),
+        None => advice,
+    };
     ADVICE.store(Box::leak(Box::new(advice)), Ordering::Release);
     // glibc loads the unwinder (libgcc_s) on the first call, which allocates: done here, so that the handler's
     // call does not.

@@ -400,13 +400,15 @@ fn both_ways_to_trace_write_the_same_showcase_and_a_wrong_way_is_named() {
 }
 
 /// Starts a long showcase render into a fresh directory, lets it load, upload and start sampling, then sends it
-/// `signal` (a `kill` option); returns how it ended and the directory, which should stay empty.
-fn signal_a_long_render(tag: &str, signal: &str) -> (Output, PathBuf) {
+/// `signal` (a `kill` option); returns how it ended and the directory, which should stay empty. `env`: variables
+/// the render runs with besides the suite's.
+fn signal_a_long_render(tag: &str, signal: &str, env: &[(&str, &std::ffi::OsStr)]) -> (Output, PathBuf) {
     let dir = temp_dir(tag);
     let png = dir.join("never.png");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
     let child = Command::new(env!("CARGO_BIN_EXE_strata"))
         .args(["render", scene.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "320x180", "--spp", "4096"])
+        .envs(env.iter().copied())
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("run strata");
@@ -419,7 +421,7 @@ fn signal_a_long_render(tag: &str, signal: &str) -> (Output, PathBuf) {
 #[test]
 fn ctrl_c_stops_the_render_and_writes_nothing() {
     // SIGINT, as a terminal's Ctrl-C sends it.
-    let (out, dir) = signal_a_long_render("interrupt", "-INT");
+    let (out, dir) = signal_a_long_render("interrupt", "-INT", &[]);
     assert_eq!(out.status.code(), Some(130), "stderr: {}", stderr(&out));
     assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
@@ -430,9 +432,28 @@ fn ctrl_c_stops_the_render_and_writes_nothing() {
 #[test]
 fn a_fatal_signal_is_named_on_stderr_and_still_ends_the_process() {
     use std::os::unix::process::ExitStatusExt as _;
-    let (out, dir) = signal_a_long_render("crash", "-SEGV");
+    let (out, dir) = signal_a_long_render("crash", "-SEGV", &[]);
     assert_eq!(out.status.signal(), Some(11), "{}", outcome(&out));
     assert!(stderr(&out).contains("strata: crashed with SIGSEGV"), "{}", outcome(&out));
+    if std::env::var_os("LP_NATIVE_VECTOR_WIDTH").is_none() {
+        assert!(!stderr(&out).contains("LP_NATIVE_VECTOR_WIDTH"), "a hint about a variable not set: {}", outcome(&out));
+    }
+    assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
+}
+
+/// Where the user set lavapipe's vector width, a crash message says what Mesa's cache does with it: code cached at
+/// another width crashes lavapipe (docs/performance.md, "lavapipe's vector width and Mesa's cache"). The render
+/// gets a shader cache of its own, so that it compiles at this width rather than run what the suite cached.
+#[test]
+fn a_crash_with_lavapipe_s_vector_width_set_names_the_cache_that_crashes_across_widths() {
+    use std::os::unix::process::ExitStatusExt as _;
+    let cache = temp_dir("crash-width-cache");
+    let env = [("LP_NATIVE_VECTOR_WIDTH", std::ffi::OsStr::new("128")), ("MESA_SHADER_CACHE_DIR", cache.as_os_str())];
+    let (out, dir) = signal_a_long_render("crash-width", "-SEGV", &env);
+    assert_eq!(out.status.signal(), Some(11), "{}", outcome(&out));
+    let err = stderr(&out);
+    assert!(err.contains("strata: crashed with SIGSEGV"), "{}", outcome(&out));
+    assert!(err.contains("LP_NATIVE_VECTOR_WIDTH is set (to 128)") && err.contains("MESA_SHADER_CACHE_DIR"), "{err}");
     assert!(std::fs::read_dir(&dir).unwrap().next().is_none(), "nothing may be left in {}", dir.display());
 }
 
