@@ -38,7 +38,7 @@ void main() {
     if (n_len > 0.0 && dot(geometric, n) < 0.0) geometric = -geometric;
     if (!(n_len > 0.0)) n = geometric;
 
-    MaterialPoint p = evaluate_material(m, in_color, in_uv, in_uv1, n, in_dpdu, in_dpdv, vec2(0.0), true);
+    MaterialPoint p = evaluate_material(m, in_color, in_uv, in_uv1, n, in_dpdu, in_dpdv, vec2(0.0), true, true);
     // BLEND's coverage sample: independent per pixel, surface point and sample (the draw record's per-sample key;
     // the point's position tells layers apart without gl_PrimitiveID, which a fragment shader may read only
     // with geometry shaders enabled).

@@ -32,9 +32,9 @@ vec4 layer_texel(int index, vec4 rows[2], vec2 uv0, vec2 uv1, vec2 footprint_lod
 // A, the film's factor in R and thickness between its bounds in G, the transmitted share in A and its colour in
 // RGB), where the material has any of them; none elsewhere. The coat's normal is `n_vertex`, the interpolated
 // vertex normal (the base's normal texture and bump lie under the coat), tilted by the coat's own normal texture
-// where it has one.
+// where it has one. `with_layers` false: none anywhere (no material has layers, so clearcoat.w is 0 in all).
 void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu, vec3 dpdv, vec2 footprint_lod,
-                     inout Shading s) {
+                     const bool with_layers, inout Shading s) {
     s.clearcoat = 0.0;
     s.clearcoat_roughness = 0.0;
     s.clearcoat_normal = n_vertex;
@@ -51,7 +51,7 @@ void evaluate_layers(GpuMaterial m, vec2 uv0, vec2 uv1, vec3 n_vertex, vec3 dpdu
     s.film_metal = vec3(1.0);
     s.anisotropy = 0.0;
     s.anisotropy_direction = vec3(0.0);
-    if (m.clearcoat.w == 0.0) return;
+    if (!with_layers || m.clearcoat.w == 0.0) return;
     s.iridescence = m.iridescence.x * layer_texel(m.iridescence_texture, m.iridescence_uv_rows, uv0, uv1, footprint_lod).r;
     s.iridescence_ior = m.iridescence.y;
     s.iridescence_thickness = m.iridescence.w;
@@ -117,8 +117,11 @@ struct MaterialPoint {
 // respect to TEXCOORD_0). Textures scale their factors (glTF 2.0 §3.9.2, §3.9.5); the normal texture tilts n
 // in the tangent frame of dpdu, dpdv through its transform, then the bump perturbs it (docs/architecture.md, "Blinn bump
 // mapping"). `with_height`: also evaluate the height itself (the G-buffer stores it; ray hits skip it).
+// `with_layers`: false where no material has layers (the accumulation pass's LAYERS), so that evaluate_layers's
+// reads of up to ten textures, which no material would reach, are not compiled (docs/performance.md, "What LLVM
+// spends a cold compile on").
 MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2 uv1, vec3 n, vec3 dpdu, vec3 dpdv,
-                                vec2 footprint_lod, const bool with_height) {
+                                vec2 footprint_lod, const bool with_height, const bool with_layers) {
     MaterialPoint p;
     vec3 n_vertex = n;
     p.base = m.base_color * vertex_color;
@@ -184,7 +187,7 @@ MaterialPoint evaluate_material(GpuMaterial m, vec4 vertex_color, vec2 uv0, vec2
     }
     p.shading.specular_color = m.specular_color.rgb * p.specular_color_texel;
     p.shading.diffuse_share = 1.0;
-    evaluate_layers(m, uv0, uv1, normalize(n_vertex), dpdu, dpdv, footprint_lod, p.shading);
+    evaluate_layers(m, uv0, uv1, normalize(n_vertex), dpdu, dpdv, footprint_lod, with_layers, p.shading);
     if (m.unlit != 0) {
         // KHR_materials_unlit: the base colour is what the surface shows, as radiance; it reflects and transmits
         // nothing (specular 0 is F0 = F90 = 0, brdf.glsl). It is no light: light sampling never picks it (its

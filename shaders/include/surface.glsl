@@ -116,7 +116,7 @@ Surface hit_surface(Hit hit, vec3 v, float cone_width, const bool visible) {
         dpdu = m3 * (h.w.x * dpdus.v[h.i0] + h.w.y * dpdus.v[h.i1] + h.w.z * dpdus.v[h.i2]);
         dpdv = m3 * (h.w.x * dpdvs.v[h.i0] + h.w.y * dpdvs.v[h.i1] + h.w.z * dpdvs.v[h.i2]);
     }
-    MaterialPoint mp = evaluate_material(m, hit_color(h), uv, uv1_area.xy, s.normal, dpdu, dpdv, lod, false);
+    MaterialPoint mp = evaluate_material(m, hit_color(h), uv, uv1_area.xy, s.normal, dpdu, dpdv, lod, false, LAYERS != 0u);
     s.normal = mp.normal;
     s.emission = mp.emission;
     s.m = mp.shading;
