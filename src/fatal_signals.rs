@@ -28,13 +28,12 @@ const VECTOR_WIDTH_VARIABLE: &str = "LP_NATIVE_VECTOR_WIDTH";
 /// What a crash message adds where the user set lavapipe's vector width: Mesa 25.0's shader cache does not tell
 /// the widths apart, and lavapipe crashes running code it cached at another width (docs/performance.md,
 /// "lavapipe's vector width and Mesa's cache"), a crash nothing else in the message would explain.
-fn vector_width_advice(width: Option<std::ffi::OsString>) -> Option<String> {
-    let width = width?;
-    Some(format!(
+fn vector_width_advice(width: &std::ffi::OsStr) -> String {
+    format!(
         "{VECTOR_WIDTH_VARIABLE} is set (to {}): Mesa's shader cache does not tell lavapipe's vector widths apart, \
          and lavapipe crashes on code it cached at another width; give each width its own MESA_SHADER_CACHE_DIR.",
         width.to_string_lossy()
-    ))
+    )
 }
 
 /// The message's last sentence, and what was running (`set_running`). Each points at a leaked `&'static str`,
@@ -61,8 +60,8 @@ pub fn report_fatal_signals() {
 
 /// The same, ending the message with `advice` instead of what `strata render` tells a user (test harnesses).
 pub fn report_fatal_signals_with(advice: &'static str) {
-    let advice: &'static str = match vector_width_advice(std::env::var_os(VECTOR_WIDTH_VARIABLE)) {
-        Some(hint) => Box::leak(format!("{advice} {hint}").into_boxed_str()),
+    let advice: &'static str = match std::env::var_os(VECTOR_WIDTH_VARIABLE) {
+        Some(width) => Box::leak(format!("{advice} {}", vector_width_advice(&width)).into_boxed_str()),
         None => advice,
     };
     ADVICE.store(Box::leak(Box::new(advice)), Ordering::Release);
